@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# Installs every Debian package unique3d needs to build, test and run. Idempotent: packages already
+# present are skipped by apt, and the npm glTF validator is installed once into tools/node_modules.
+set -euo pipefail
+
+PACKAGES=(
+  build-essential cmake ninja-build ccache pkg-config git
+  libtorch-dev libopenblas0-pthread
+  libopencv-dev libeigen3-dev libopen3d-dev libtinygltf-dev
+  libcli11-dev nlohmann-json3-dev libstb-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+)
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+
+missing=()
+# Node.js + npm only run the glTF validator in tests; a machine that already has npm (e.g. from
+# NodeSource, whose nodejs conflicts with Debian's npm) keeps it.
+command -v npm >/dev/null 2>&1 || PACKAGES+=(nodejs npm)
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "[install] apt packages: ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+else
+  echo "[install] all apt packages present"
+fi
+
+# Khronos glTF validator (npm) for the GLB output tests.
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+if [ ! -x "$root/tools/node_modules/.bin/gltf-validator" ] && [ ! -f "$root/tools/node_modules/gltf-validator/package.json" ]; then
+  echo "[install] npm gltf-validator"
+  (cd "$root/tools" && npm install --no-audit --no-fund --loglevel=error >/dev/null)
+else
+  echo "[install] gltf-validator present"
+fi

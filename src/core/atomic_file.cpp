@@ -1,0 +1,46 @@
+#include "core/atomic_file.h"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <string>
+
+#include "core/error.h"
+
+namespace u3d {
+
+namespace fs = std::filesystem;
+
+void write_atomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
+  fs::path dir = path.parent_path().empty() ? fs::path(".") : path.parent_path();
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw Error("cannot write " + path.string() + ": folder " + dir.string() + " does not exist");
+  if (access(dir.c_str(), W_OK) != 0) throw Error("cannot write " + path.string() + ": folder " + dir.string() + " is not writable");
+  if (fs::is_directory(path, ec)) throw Error("cannot write " + path.string() + ": it is a folder");
+  static std::atomic<int> counter{0};
+  // Keep the extension last: OpenCV and friends pick the encoder from it.
+  fs::path tmp = dir / ("." + path.stem().string() + ".tmp" + std::to_string(getpid()) + "_" +
+                        std::to_string(counter++) + path.extension().string());
+  try {
+    write(tmp);
+    fs::rename(tmp, path);
+  } catch (const fs::filesystem_error& e) {
+    fs::remove(tmp, ec);
+    throw Error("cannot write " + path.string() + ": " + e.code().message());
+  } catch (...) {
+    fs::remove(tmp, ec);
+    throw;
+  }
+}
+
+void ensure_directory(const fs::path& dir) {
+  std::error_code ec;
+  if (fs::is_directory(dir, ec)) {
+    if (access(dir.c_str(), W_OK) != 0) throw Error("output folder " + dir.string() + " is not writable");
+    return;
+  }
+  fs::create_directories(dir, ec);
+  if (ec) throw Error("cannot create output folder " + dir.string() + ": " + ec.message());
+}
+
+}  // namespace u3d

@@ -1,0 +1,104 @@
+#include "core/image.h"
+
+#include <cmath>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+namespace u3d {
+
+namespace fs = std::filesystem;
+
+Image::Image(int w, int h, int c, float fill) : width(w), height(h), channels(c), data(size_t(w) * h * c, fill) {}
+
+namespace {
+
+cv::Mat to_mat(const Image& im) {
+  return cv::Mat(im.height, im.width, CV_32FC(im.channels), const_cast<float*>(im.data.data()));
+}
+
+Image from_mat_float(const cv::Mat& m) {
+  Image im(m.cols, m.rows, m.channels());
+  cv::Mat dst(m.rows, m.cols, CV_32FC(m.channels()), im.data.data());
+  m.copyTo(dst);
+  return im;
+}
+
+}  // namespace
+
+Image load_image(const fs::path& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw Error("image not found: " + path.string());
+  if (fs::is_directory(path, ec)) throw Error("expected an image file, got a folder: " + path.string());
+  cv::Mat m;
+  try {
+    m = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception& e) {
+    throw Error("cannot decode image " + path.string() + ": " + e.what());
+  }
+  if (m.empty()) throw Error("cannot decode image " + path.string() + " (corrupt or not an image file)");
+  double scale = 1.0;
+  switch (m.depth()) {
+    case CV_8U: scale = 1.0 / 255.0; break;
+    case CV_16U: scale = 1.0 / 65535.0; break;
+    case CV_32F: scale = 1.0; break;
+    default: throw Error("unsupported pixel depth in " + path.string() + " (use 8- or 16-bit PNG/JPEG)");
+  }
+  cv::Mat f;
+  m.convertTo(f, CV_32F, scale);
+  if (f.channels() == 3) cv::cvtColor(f, f, cv::COLOR_BGR2RGB);
+  else if (f.channels() == 4) cv::cvtColor(f, f, cv::COLOR_BGRA2RGBA);
+  else if (f.channels() != 1) throw Error("unsupported channel count " + std::to_string(f.channels()) + " in " + path.string());
+  return from_mat_float(f);
+}
+
+Image load_image_rgba(const fs::path& path) {
+  Image src = load_image(path);
+  if (src.channels == 4) return src;
+  Image out(src.width, src.height, 4, 1.f);
+  for (size_t i = 0; i < src.pixel_count(); ++i) {
+    for (int c = 0; c < 3; ++c) out.data[i * 4 + c] = src.data[i * src.channels + (src.channels == 1 ? 0 : c)];
+  }
+  return out;
+}
+
+void save_image(const Image& image, const fs::path& path, int bit_depth) {
+  require(!image.empty() && image.width > 0 && image.height > 0, "cannot write empty image " + path.string());
+  require(image.channels == 1 || image.channels == 3 || image.channels == 4,
+          "cannot write image with " + std::to_string(image.channels) + " channels: " + path.string());
+  require(bit_depth == 8 || bit_depth == 16, "bit depth must be 8 or 16, got " + std::to_string(bit_depth));
+  for (float v : image.data) require(!std::isnan(v), "refusing to write image with NaN values: " + path.string());
+  std::string ext = path.extension().string();
+  for (auto& ch : ext) ch = char(std::tolower(ch));
+  bool jpeg = ext == ".jpg" || ext == ".jpeg";
+  require(ext == ".png" || jpeg, "unsupported image extension '" + ext + "' (use .png or .jpg): " + path.string());
+  if (jpeg) bit_depth = 8;
+
+  cv::Mat f = to_mat(image).clone();
+  if (image.channels == 3) cv::cvtColor(f, f, cv::COLOR_RGB2BGR);
+  else if (image.channels == 4) cv::cvtColor(f, f, jpeg ? cv::COLOR_RGBA2BGR : cv::COLOR_RGBA2BGRA);
+  cv::Mat out;
+  f.convertTo(out, bit_depth == 16 ? CV_16U : CV_8U, bit_depth == 16 ? 65535.0 : 255.0);  // saturating, rounds
+  write_atomically(path, [&](const fs::path& tmp) {
+    bool ok = false;
+    try {
+      ok = cv::imwrite(tmp.string(), out);
+    } catch (const cv::Exception& e) {
+      throw Error("cannot write image " + path.string() + ": " + e.what());
+    }
+    if (!ok) throw Error("cannot write image " + path.string());
+  });
+}
+
+Image resize_image(const Image& image, int width, int height) {
+  require(width > 0 && height > 0, "resize to an empty size");
+  if (width == image.width && height == image.height) return image;
+  cv::Mat dst;
+  int interp = (width < image.width) ? cv::INTER_AREA : cv::INTER_LINEAR;
+  cv::resize(to_mat(image), dst, cv::Size(width, height), 0, 0, interp);
+  return from_mat_float(dst);
+}
+
+}  // namespace u3d

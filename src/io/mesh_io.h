@@ -1,0 +1,15 @@
+#pragma once
+// Mesh files. Reading: .obj (+ .mtl, several materials and textures), .ply, .glb/.gltf (tinygltf,
+// node transforms applied). Writing: .glb (vertex colours as linear COLOR_0, textures as sRGB PNG),
+// .obj (+ .mtl + textures), .ply. The format is chosen by extension; writes are atomic.
+// Errors (missing file, corrupt content, empty mesh, NaN) are u3d::Error naming the file.
+#include <filesystem>
+
+#include "core/mesh.h"
+
+namespace u3d {
+
+Mesh read_mesh(const std::filesystem::path& path);
+void write_mesh(const Mesh& mesh, const std::filesystem::path& path);
+
+}  // namespace u3d
