@@ -198,33 +198,64 @@ inline void draw_in_tile(const ScreenTriangle& t, const CornerBary* clipped_corn
     step_y[k] = dx * kSubpixel;
     row[k] = dx * (cy - t.y[a]) - dy * (cx - t.x[a]) - bias[k];
   }
+  // Per row, the covered pixels form one interval (the triangle is convex): find it from the edge
+  // functions (reciprocals give a guess, exact integer tests settle it), then shade it without
+  // per-pixel coverage branches.
+  double inv_step[3];
+  for (int k = 0; k < 3; ++k) inv_step[k] = step_x[k] != 0 ? 1.0 / double(step_x[k]) : 0.0;
   const int width = buf.width;
+  const int span_max = xe - xs;
+  float* depth = buf.depth.data();
+  int32_t* face_id = buf.face_id.data();
+  Vec2f* bary = buf.bary.data();
   const float iw0 = t.inv_w[0], iw1 = t.inv_w[1], iw2 = t.inv_w[2];
-  for (int y = ys; y <= ye; ++y) {
-    int64_t e0 = row[0], e1 = row[1], e2 = row[2];
-    size_t idx = size_t(y) * width + xs;
-    for (int x = xs; x <= xe; ++x, ++idx, e0 += step_x[0], e1 += step_x[1], e2 += step_x[2]) {
-      if ((e0 | e1 | e2) < 0) continue;
+  const float d0 = t.depth[0], d1 = t.depth[1], d2 = t.depth[2];
+  const float bias0 = float(bias[0]), bias1 = float(bias[1]), bias2 = float(bias[2]);
+  for (int y = ys; y <= ye; ++y, row[0] += step_y[0], row[1] += step_y[1], row[2] += step_y[2]) {
+    int64_t lo = 0, hi = span_max;  // pixel offsets from xs, inclusive
+    for (int k = 0; k < 3 && lo <= hi; ++k) {
+      const int64_t e = row[k], sx = step_x[k];
+      if (sx == 0) {
+        if (e < 0) hi = -1;
+      } else if (sx > 0) {  // inside for i >= -e / sx
+        if (e >= 0) continue;
+        int64_t i = int64_t(std::ceil(double(-e) * inv_step[k]));
+        while (i > 0 && e + sx * (i - 1) >= 0) --i;
+        while (e + sx * i < 0) ++i;
+        lo = std::max(lo, i);
+      } else {  // inside for i <= e / -sx
+        if (e < 0) {
+          hi = -1;
+          continue;
+        }
+        int64_t i = int64_t(std::floor(double(e) * -inv_step[k]));
+        while (e + sx * (i + 1) >= 0) ++i;
+        while (i >= 0 && e + sx * i < 0) --i;
+        hi = std::min(hi, i);
+      }
+    }
+    if (lo > hi) continue;
+    int64_t e0 = row[0] + step_x[0] * lo, e1 = row[1] + step_x[1] * lo, e2 = row[2] + step_x[2] * lo;
+    size_t idx = size_t(y) * width + size_t(xs + lo);
+    for (int64_t i = lo; i <= hi; ++i, ++idx, e0 += step_x[0], e1 += step_x[1], e2 += step_x[2]) {
       // Screen-space weights divided by w give the perspective-correct (3D) barycentrics.
-      float q0 = float(e0 + bias[0]) * iw0, q1 = float(e1 + bias[1]) * iw1, q2 = float(e2 + bias[2]) * iw2;
-      float inv_sum = 1.f / (q0 + q1 + q2);
-      float b1 = q1 * inv_sum, b2 = q2 * inv_sum, b0 = 1.f - b1 - b2;
-      float z = b0 * t.depth[0] + b1 * t.depth[1] + b2 * t.depth[2];
-      float& cur = buf.depth[idx];
-      if (z < cur || (z == cur && t.face < buf.face_id[idx])) {
-        cur = z;
-        buf.face_id[idx] = t.face;
+      const float q0 = (float(e0) + bias0) * iw0, q1 = (float(e1) + bias1) * iw1, q2 = (float(e2) + bias2) * iw2;
+      const float inv_sum = 1.f / (q0 + q1 + q2);
+      const float z = (q0 * d0 + q1 * d1 + q2 * d2) * inv_sum;
+      if (z < depth[idx] || (z == depth[idx] && t.face < face_id[idx])) {
+        depth[idx] = z;
+        face_id[idx] = t.face;
+        const float b0 = q0 * inv_sum, b1 = q1 * inv_sum, b2 = q2 * inv_sum;
         if (t.corners == kCornersIdentity) {
-          buf.bary[idx] = Vec2f(b1, b2);
+          bary[idx] = Vec2f(b1, b2);
         } else if (t.corners == kCornersSwapped) {
-          buf.bary[idx] = Vec2f(b2, b1);
+          bary[idx] = Vec2f(b2, b1);
         } else {
           const CornerBary& c = clipped_corners[t.corners];
-          buf.bary[idx] = b0 * c[0] + b1 * c[1] + b2 * c[2];
+          bary[idx] = b0 * c[0] + b1 * c[1] + b2 * c[2];
         }
       }
     }
-    for (int k = 0; k < 3; ++k) row[k] += step_y[k];
   }
 }
 
@@ -364,20 +395,14 @@ RasterBuffer rasterize(const std::vector<Vec3f>& positions, const std::vector<Ve
   buf.width = width;
   buf.height = height;
   const size_t pixels = buf.pixel_count();
-  buf.face_id.resize(pixels);
-  buf.bary.resize(pixels);
-  buf.depth.resize(pixels);
+  // std::vector writes every element on construction anyway, so it writes the background values.
+  buf.face_id.assign(pixels, -1);
+  buf.bary.assign(pixels, Vec2f(0.f, 0.f));
+  buf.depth.assign(pixels, std::numeric_limits<float>::infinity());
 #pragma omp parallel for schedule(dynamic, 1) if (int64_t(total) + int64_t(pixels / 64) > kMinParallelWork)
   for (int64_t tile = 0; tile < int64_t(tile_count); ++tile) {
     int x0 = int(tile % tiles_x) * kTileSize, y0 = int(tile / tiles_x) * kTileSize;
     int x1 = std::min(x0 + kTileSize, width) - 1, y1 = std::min(y0 + kTileSize, height) - 1;
-    for (int y = y0; y <= y1; ++y) {  // the tile owns its pixels, so it also initializes them
-      size_t row = size_t(y) * width;
-      std::fill(buf.face_id.begin() + row + x0, buf.face_id.begin() + row + x1 + 1, -1);
-      std::fill(buf.bary.begin() + row + x0, buf.bary.begin() + row + x1 + 1, Vec2f(0.f, 0.f));
-      std::fill(buf.depth.begin() + row + x0, buf.depth.begin() + row + x1 + 1,
-                std::numeric_limits<float>::infinity());
-    }
     for (size_t k = tile_start[tile]; k < tile_start[tile + 1]; ++k)
       draw_in_tile(triangle(bins[k]), corners.data(), x0, y0, x1, y1, buf);
   }
