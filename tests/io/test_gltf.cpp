@@ -24,6 +24,7 @@ TEST(Glb, ColouredRoundTripConvertsColoursThroughLinearAndBack) {
   expect_same_geometry(mesh, back);
   expect_same_colors(mesh, back, 1e-5f);
   EXPECT_TRUE(back.uvs.empty());
+  EXPECT_TRUE(back.materials.empty()) << "the plain material the writer adds is not a real one";
 }
 
 // The file must hold LINEAR colours: read the COLOR_0 accessor directly, bypassing our reader.
