@@ -58,6 +58,10 @@ class GltfMeshBuilder {
 
     if (!any_color_) mesh_.colors.clear();
     if (!any_uv_) mesh_.uvs.clear();
+    // One untextured white material says nothing that "no materials" does not (glTF writers, ours
+    // included, must name a material even for vertex-coloured meshes).
+    if (mesh_.materials.size() == 1 && mesh_.materials[0].texture.empty() && mesh_.materials[0].base_color == Vec4f::Ones())
+      mesh_.materials.clear();
     if (mesh_.materials.empty()) mesh_.face_material.clear();
     return std::move(mesh_);
   }

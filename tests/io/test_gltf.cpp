@@ -24,6 +24,7 @@ TEST(Glb, ColouredRoundTripConvertsColoursThroughLinearAndBack) {
   expect_same_geometry(mesh, back);
   expect_same_colors(mesh, back, 1e-5f);
   EXPECT_TRUE(back.uvs.empty());
+  EXPECT_TRUE(back.materials.empty()) << "the plain material the writer adds is not a real one";
 }
 
 // The file must hold LINEAR colours: read the COLOR_0 accessor directly, bypassing our reader.
@@ -181,4 +182,47 @@ TEST(Glb, CorruptFilesGiveErrors) {
       EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
     }
   }
+}
+
+// A .gltf with an external .bin and PNG, written by tinygltf rather than by us, so a UV flip that our
+// writer and reader got wrong in the same way could not cancel out.
+TEST(Gltf, ReadsExternalBufferAndTextureAndFlipsTexcoords) {
+  fs::path dir = scratch_dir();
+  tinygltf::Model model = instanced_triangle_model();
+  model.scenes[0].nodes = {3};
+  int uvs = add_accessor(model, append_buffer(model, std::vector<float>{0.25f, 0.1f, 1.f, 0.f, 0.f, 1.f}),
+                         TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2, 3);
+  model.meshes[0].primitives[0].attributes["TEXCOORD_0"] = uvs;
+  model.meshes[0].primitives[0].material = 0;
+  save_image(gradient_texture(4, 2, 3, 4), dir / "albedo.png");
+  tinygltf::Image image;
+  image.uri = "albedo.png";
+  model.images.push_back(image);
+  tinygltf::Texture texture;
+  texture.source = 0;
+  model.textures.push_back(texture);
+  tinygltf::Material material;
+  material.name = "skin";
+  material.pbrMetallicRoughness.baseColorFactor = {0.5, 1.0, 0.0, 1.0};
+  material.pbrMetallicRoughness.baseColorTexture.index = 0;
+  model.materials.push_back(material);
+  model.buffers[0].uri = "tri.bin";
+  tinygltf::TinyGLTF writer;
+  ASSERT_TRUE(writer.WriteGltfSceneToFile(&model, (dir / "tri.gltf").string(), false, false, true, false));
+  ASSERT_TRUE(fs::exists(dir / "tri.bin"));
+
+  Mesh mesh = read_mesh(dir / "tri.gltf");
+  ASSERT_EQ(mesh.vertex_count(), 3u);
+  EXPECT_EQ(mesh.positions[1], Vec3f(1, 0, 0));
+  ASSERT_EQ(mesh.uvs.size(), 3u);
+  EXPECT_NEAR(mesh.uvs[0].x(), 0.25f, 1e-7f);
+  EXPECT_NEAR(mesh.uvs[0].y(), 0.9f, 1e-7f);
+  EXPECT_NEAR(mesh.uvs[2].y(), 0.f, 1e-7f);
+  ASSERT_EQ(mesh.materials.size(), 1u);
+  EXPECT_EQ(mesh.materials[0].name, "skin");
+  EXPECT_NEAR(mesh.materials[0].base_color[0], linear_to_srgb(0.5f), 1e-6f);
+  expect_same_image(gradient_texture(4, 2, 3, 4), mesh.materials[0].texture, 1e-6f);
+
+  fs::remove(dir / "albedo.png");
+  EXPECT_THROW(read_mesh(dir / "tri.gltf"), Error) << "a missing texture image is an error";
 }

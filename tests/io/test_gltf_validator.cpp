@@ -48,6 +48,12 @@ TEST(GltfValidator, WrittenGlbFilesHaveNoErrors) {
   mixed.face_material.push_back(1);
   write_mesh(mixed, dir / "mixed.glb");
   EXPECT_EQ(validate(dir / "mixed.glb"), 0);
+
+  // A real object with UV seams (texture shrunk to keep the test quick).
+  Mesh avocado = read_mesh(fs::path(UNIQUE3D_TEST_DATA) / "objects" / "avocado" / "avocado.obj");
+  avocado.materials[0].texture = resize_image(avocado.materials[0].texture, 128, 128);
+  write_mesh(avocado, dir / "avocado.glb");
+  EXPECT_EQ(validate(dir / "avocado.glb"), 0);
 }
 
 // The check above only means something if the validator rejects broken files.
