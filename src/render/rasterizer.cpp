@@ -40,6 +40,8 @@ constexpr int64_t kMinParallelWork = 16384;
 
 // Clip planes, as bits of an outcode: near, far, and the guard band on x and y.
 constexpr int kPlaneCount = 6;
+// Extra outcode bit: the vertex is NaN or infinite (e.g. a diverged optimization); its faces are dropped.
+constexpr uint8_t kNonFinite = 1u << kPlaneCount;
 
 struct ClipPlanes {
   float guard_x, guard_y;  // |x/w| <= guard_x keeps the pixel x within the guard band
@@ -55,9 +57,10 @@ struct ClipPlanes {
     }
   }
   uint8_t outcode(const Vec4f& p) const {
+    if (!p.allFinite()) return kNonFinite;
     uint8_t code = 0;
     for (int k = 0; k < kPlaneCount; ++k)
-      if (!(distance(p, k) >= 0.f)) code |= uint8_t(1u << k);  // NaN counts as outside
+      if (!(distance(p, k) >= 0.f)) code |= uint8_t(1u << k);
     return code;
   }
 };
@@ -334,6 +337,7 @@ RasterBuffer rasterize(const std::vector<Vec3f>& positions, const std::vector<Ve
       for (int64_t f = chunk_begin(nf, c, chunks), end = chunk_begin(nf, c + 1, chunks); f < end; ++f) {
         const Vec3i& ids = faces[f];
         const uint8_t o0 = outcode[ids[0]], o1 = outcode[ids[1]], o2 = outcode[ids[2]];
+        if ((o0 | o1 | o2) & kNonFinite) continue;
         if ((o0 | o1 | o2) == 0) {
           ScreenVertex v[3] = {screen[ids[0]], screen[ids[1]], screen[ids[2]]};
           n += setup_triangle(v, int32_t(f), kCornersIdentity, width, height, options.cull_backfaces, out[n], nullptr);

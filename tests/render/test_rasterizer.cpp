@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "core/error.h"
@@ -45,6 +46,21 @@ TEST(Rasterizer, RejectsBadIndices) {
   std::vector<Vec3f> p = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
   EXPECT_THROW(rasterize(p, {Vec3i(0, 1, 3)}, view_camera(View::Front, 8)), Error);
   EXPECT_THROW(rasterize(p, {Vec3i(-1, 1, 2)}, view_camera(View::Front, 8)), Error);
+}
+
+// Faces touching a NaN or infinite vertex are dropped; the rest of the mesh still renders.
+TEST(Rasterizer, FacesWithNonFiniteVerticesAreDropped) {
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  std::vector<Vec3f> p = {{-0.9f, -0.9f, 0}, {0.9f, -0.9f, 0}, {-0.9f, 0.9f, 0}, {nan, 0.5f, 0}, {0.5f, inf, 0}};
+  std::vector<Vec3i> f = {{0, 3, 2}, {0, 1, 2}, {1, 4, 2}};
+  RasterBuffer buf = rasterize(p, f, view_camera(View::Front, 32));
+  int covered = 0;
+  for (size_t i = 0; i < buf.pixel_count(); ++i) {
+    if (!buf.covered(i)) continue;
+    ++covered;
+    EXPECT_EQ(buf.face_id[i], 1);
+  }
+  EXPECT_GT(covered, 300);
 }
 
 // Pixels whose centre is clearly inside a triangle are covered and clearly outside are not ("clearly":
