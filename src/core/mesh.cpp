@@ -14,23 +14,28 @@ bool Mesh::has_texture() const {
 }
 
 void Mesh::validate(const std::string& what) const {
+  // Per-element checks build their message only on failure: building it eagerly costs more than
+  // the check itself on million-face meshes.
   require(!positions.empty(), what + ": mesh has no vertices");
   require(!faces.empty(), what + ": mesh has no faces");
   for (size_t i = 0; i < positions.size(); ++i)
-    require(positions[i].allFinite(), what + ": vertex " + std::to_string(i) + " has a NaN or infinite coordinate");
+    if (!positions[i].allFinite()) throw Error(what + ": vertex " + std::to_string(i) + " has a NaN or infinite coordinate");
   const int n = int(positions.size());
   for (size_t f = 0; f < faces.size(); ++f)
     for (int k = 0; k < 3; ++k)
-      require(faces[f][k] >= 0 && faces[f][k] < n,
-              what + ": face " + std::to_string(f) + " references vertex " + std::to_string(faces[f][k]) +
-                  " but the mesh has " + std::to_string(n) + " vertices");
+      if (faces[f][k] < 0 || faces[f][k] >= n)
+        throw Error(what + ": face " + std::to_string(f) + " references vertex " + std::to_string(faces[f][k]) +
+                    " but the mesh has " + std::to_string(n) + " vertices");
   require(colors.empty() || colors.size() == positions.size(), what + ": colour count does not match vertex count");
   require(uvs.empty() || uvs.size() == positions.size(), what + ": UV count does not match vertex count");
   require(face_material.empty() || face_material.size() == faces.size(), what + ": material index count does not match face count");
   for (int m : face_material)
-    require(m >= 0 && (m < int(materials.size()) || (materials.empty() && m == 0)), what + ": face material index out of range");
-  for (const auto& c : colors) require(c.allFinite(), what + ": vertex colour is NaN");
-  for (const auto& t : uvs) require(t.allFinite(), what + ": UV is NaN");
+    if (!(m >= 0 && (m < int(materials.size()) || (materials.empty() && m == 0))))
+      throw Error(what + ": face material index out of range");
+  for (const auto& c : colors)
+    if (!c.allFinite()) throw Error(what + ": vertex colour is NaN");
+  for (const auto& t : uvs)
+    if (!t.allFinite()) throw Error(what + ": UV is NaN");
 }
 
 BoundingBox bounding_box(const std::vector<Vec3f>& positions) {

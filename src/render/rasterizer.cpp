@@ -27,6 +27,9 @@ constexpr int64_t kSubpixel = int64_t(1) << kSubpixelBits;
 constexpr int64_t kHalfPixel = kSubpixel / 2;
 constexpr int kTileBits = 5;
 constexpr int kTileSize = 1 << kTileBits;
+// Triangles at most this many pixels wide (within a tile) test every pixel of their bounding box;
+// wider ones solve each row for its covered span.
+constexpr int kNarrowSpan = 8;
 // Vertices further than this from the image (in pixels) are clipped away, which bounds fixed-point
 // coordinates by 2^22 and edge-function products by 2^46: far from int64 overflow.
 constexpr float kGuardBandPixels = 16384.f;
@@ -37,6 +40,8 @@ constexpr int64_t kMinParallelWork = 16384;
 
 // Clip planes, as bits of an outcode: near, far, and the guard band on x and y.
 constexpr int kPlaneCount = 6;
+// Extra outcode bit: the vertex is NaN or infinite (e.g. a diverged optimization); its faces are dropped.
+constexpr uint8_t kNonFinite = 1u << kPlaneCount;
 
 struct ClipPlanes {
   float guard_x, guard_y;  // |x/w| <= guard_x keeps the pixel x within the guard band
@@ -52,9 +57,10 @@ struct ClipPlanes {
     }
   }
   uint8_t outcode(const Vec4f& p) const {
+    if (!p.allFinite()) return kNonFinite;
     uint8_t code = 0;
     for (int k = 0; k < kPlaneCount; ++k)
-      if (!(distance(p, k) >= 0.f)) code |= uint8_t(1u << k);  // NaN counts as outside
+      if (!(distance(p, k) >= 0.f)) code |= uint8_t(1u << k);
     return code;
   }
 };
@@ -81,12 +87,19 @@ struct ScreenTriangle {
 // Barycentrics (b1, b2) w.r.t. the original face of the three vertices of a clipped sub-triangle.
 using CornerBary = std::array<Vec2f, 3>;
 
+// floor(x + 0.5) without a libm call (no SSE4.1 rounding instructions in the baseline ISA).
+int32_t round_to_int(double x) {
+  const double y = x + 0.5;
+  const int64_t t = int64_t(y);  // truncates toward zero
+  return int32_t(t - (double(t) > y));
+}
+
 ScreenVertex to_screen(const Vec4f& clip, float depth, int width, int height) {
   // Double precision so shared vertices snap identically whichever path (plain or clipped) sees them.
   double inv_w = 1.0 / double(clip.w());
   double px = (double(clip.x()) * inv_w + 1.0) * 0.5 * width;
   double py = (1.0 - double(clip.y()) * inv_w) * 0.5 * height;
-  return {int32_t(std::llround(px * kSubpixel)), int32_t(std::llround(py * kSubpixel)), float(inv_w), depth};
+  return {round_to_int(px * kSubpixel), round_to_int(py * kSubpixel), float(inv_w), depth};
 }
 
 int64_t floor_div_subpixel(int64_t v) { return v >> kSubpixelBits; }  // arithmetic shift = floor
@@ -198,19 +211,47 @@ inline void draw_in_tile(const ScreenTriangle& t, const CornerBary* clipped_corn
     step_y[k] = dx * kSubpixel;
     row[k] = dx * (cy - t.y[a]) - dy * (cx - t.x[a]) - bias[k];
   }
-  // Per row, the covered pixels form one interval (the triangle is convex): find it from the edge
-  // functions (reciprocals give a guess, exact integer tests settle it), then shade it without
-  // per-pixel coverage branches.
-  double inv_step[3];
-  for (int k = 0; k < 3; ++k) inv_step[k] = step_x[k] != 0 ? 1.0 / double(step_x[k]) : 0.0;
   const int width = buf.width;
-  const int span_max = xe - xs;
   float* depth = buf.depth.data();
   int32_t* face_id = buf.face_id.data();
   Vec2f* bary = buf.bary.data();
   const float iw0 = t.inv_w[0], iw1 = t.inv_w[1], iw2 = t.inv_w[2];
   const float d0 = t.depth[0], d1 = t.depth[1], d2 = t.depth[2];
   const float bias0 = float(bias[0]), bias1 = float(bias[1]), bias2 = float(bias[2]);
+  // Depth test and write of one covered pixel, given its (biased) edge functions.
+  auto shade = [&](size_t idx, int64_t e0, int64_t e1, int64_t e2) {
+    // Screen-space weights divided by w give the perspective-correct (3D) barycentrics.
+    const float q0 = (float(e0) + bias0) * iw0, q1 = (float(e1) + bias1) * iw1, q2 = (float(e2) + bias2) * iw2;
+    const float inv_sum = 1.f / (q0 + q1 + q2);
+    const float z = (q0 * d0 + q1 * d1 + q2 * d2) * inv_sum;
+    if (z < depth[idx] || (z == depth[idx] && t.face < face_id[idx])) {
+      depth[idx] = z;
+      face_id[idx] = t.face;
+      const float b0 = q0 * inv_sum, b1 = q1 * inv_sum, b2 = q2 * inv_sum;
+      if (t.corners == kCornersIdentity) {
+        bary[idx] = Vec2f(b1, b2);
+      } else if (t.corners == kCornersSwapped) {
+        bary[idx] = Vec2f(b2, b1);
+      } else {
+        const CornerBary& c = clipped_corners[t.corners];
+        bary[idx] = b0 * c[0] + b1 * c[1] + b2 * c[2];
+      }
+    }
+  };
+  const int span_max = xe - xs;
+  if (span_max < kNarrowSpan) {  // narrow: testing every pixel is cheaper than solving for the span
+    for (int y = ys; y <= ye; ++y, row[0] += step_y[0], row[1] += step_y[1], row[2] += step_y[2]) {
+      int64_t e0 = row[0], e1 = row[1], e2 = row[2];
+      size_t idx = size_t(y) * width + xs;
+      for (int x = xs; x <= xe; ++x, ++idx, e0 += step_x[0], e1 += step_x[1], e2 += step_x[2])
+        if ((e0 | e1 | e2) >= 0) shade(idx, e0, e1, e2);
+    }
+    return;
+  }
+  // Wide: per row the covered pixels form one interval (the triangle is convex). Reciprocals of the
+  // steps give a guess of its ends, exact integer tests settle them.
+  double inv_step[3];
+  for (int k = 0; k < 3; ++k) inv_step[k] = step_x[k] != 0 ? 1.0 / double(step_x[k]) : 0.0;
   for (int y = ys; y <= ye; ++y, row[0] += step_y[0], row[1] += step_y[1], row[2] += step_y[2]) {
     int64_t lo = 0, hi = span_max;  // pixel offsets from xs, inclusive
     for (int k = 0; k < 3 && lo <= hi; ++k) {
@@ -237,25 +278,7 @@ inline void draw_in_tile(const ScreenTriangle& t, const CornerBary* clipped_corn
     if (lo > hi) continue;
     int64_t e0 = row[0] + step_x[0] * lo, e1 = row[1] + step_x[1] * lo, e2 = row[2] + step_x[2] * lo;
     size_t idx = size_t(y) * width + size_t(xs + lo);
-    for (int64_t i = lo; i <= hi; ++i, ++idx, e0 += step_x[0], e1 += step_x[1], e2 += step_x[2]) {
-      // Screen-space weights divided by w give the perspective-correct (3D) barycentrics.
-      const float q0 = (float(e0) + bias0) * iw0, q1 = (float(e1) + bias1) * iw1, q2 = (float(e2) + bias2) * iw2;
-      const float inv_sum = 1.f / (q0 + q1 + q2);
-      const float z = (q0 * d0 + q1 * d1 + q2 * d2) * inv_sum;
-      if (z < depth[idx] || (z == depth[idx] && t.face < face_id[idx])) {
-        depth[idx] = z;
-        face_id[idx] = t.face;
-        const float b0 = q0 * inv_sum, b1 = q1 * inv_sum, b2 = q2 * inv_sum;
-        if (t.corners == kCornersIdentity) {
-          bary[idx] = Vec2f(b1, b2);
-        } else if (t.corners == kCornersSwapped) {
-          bary[idx] = Vec2f(b2, b1);
-        } else {
-          const CornerBary& c = clipped_corners[t.corners];
-          bary[idx] = b0 * c[0] + b1 * c[1] + b2 * c[2];
-        }
-      }
-    }
+    for (int64_t i = lo; i <= hi; ++i, ++idx, e0 += step_x[0], e1 += step_x[1], e2 += step_x[2]) shade(idx, e0, e1, e2);
   }
 }
 
@@ -314,6 +337,7 @@ RasterBuffer rasterize(const std::vector<Vec3f>& positions, const std::vector<Ve
       for (int64_t f = chunk_begin(nf, c, chunks), end = chunk_begin(nf, c + 1, chunks); f < end; ++f) {
         const Vec3i& ids = faces[f];
         const uint8_t o0 = outcode[ids[0]], o1 = outcode[ids[1]], o2 = outcode[ids[2]];
+        if ((o0 | o1 | o2) & kNonFinite) continue;
         if ((o0 | o1 | o2) == 0) {
           ScreenVertex v[3] = {screen[ids[0]], screen[ids[1]], screen[ids[2]]};
           n += setup_triangle(v, int32_t(f), kCornersIdentity, width, height, options.cull_backfaces, out[n], nullptr);

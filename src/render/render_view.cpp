@@ -22,8 +22,10 @@ RenderedView render_view(const Mesh& mesh, const Camera& camera, const RenderSet
   } else {
     view.normal = shade_face_normals(buf, face_normals(mesh.positions, mesh.faces), fine, settings.normal_space);
   }
-  view.rgb = downsample_alpha_weighted(view.rgb, settings.ssaa);
-  view.normal = downsample_alpha_weighted(view.normal, settings.ssaa);
+  if (settings.ssaa > 1) {
+    view.rgb = downsample_alpha_weighted(view.rgb, settings.ssaa);
+    view.normal = downsample_alpha_weighted(view.normal, settings.ssaa);
+  }
   return view;
 }
 

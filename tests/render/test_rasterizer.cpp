@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "core/error.h"
@@ -45,6 +46,21 @@ TEST(Rasterizer, RejectsBadIndices) {
   std::vector<Vec3f> p = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
   EXPECT_THROW(rasterize(p, {Vec3i(0, 1, 3)}, view_camera(View::Front, 8)), Error);
   EXPECT_THROW(rasterize(p, {Vec3i(-1, 1, 2)}, view_camera(View::Front, 8)), Error);
+}
+
+// Faces touching a NaN or infinite vertex are dropped; the rest of the mesh still renders.
+TEST(Rasterizer, FacesWithNonFiniteVerticesAreDropped) {
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  std::vector<Vec3f> p = {{-0.9f, -0.9f, 0}, {0.9f, -0.9f, 0}, {-0.9f, 0.9f, 0}, {nan, 0.5f, 0}, {0.5f, inf, 0}};
+  std::vector<Vec3i> f = {{0, 3, 2}, {0, 1, 2}, {1, 4, 2}};
+  RasterBuffer buf = rasterize(p, f, view_camera(View::Front, 32));
+  int covered = 0;
+  for (size_t i = 0; i < buf.pixel_count(); ++i) {
+    if (!buf.covered(i)) continue;
+    ++covered;
+    EXPECT_EQ(buf.face_id[i], 1);
+  }
+  EXPECT_GT(covered, 300);
 }
 
 // Pixels whose centre is clearly inside a triangle are covered and clearly outside are not ("clearly":
@@ -289,4 +305,45 @@ TEST(Rasterizer, ResultDoesNotDependOnThreadCount) {
   EXPECT_EQ(one.face_id, many.face_id);
   EXPECT_EQ(one.depth, many.depth);
   EXPECT_EQ(one.bary, many.bary);
+}
+
+// Watertightness at scale (parallel path): a jittered 120 x 120 grid whose quads are split along the
+// same diagonal. Its triangles form two classes (lower-right, upper-left) that only meet along
+// edges, so rendering each class alone must cover disjoint pixel sets whose union is the whole square.
+TEST(Rasterizer, LargeGridIsWatertightWithoutDoubleCoverage) {
+  const int res = 512, n = 120, cell = 4, origin = 16;
+  Camera cam = view_camera(View::Front, res);
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> jitter(-2, 2);
+  std::vector<Vec3f> p;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      bool border = i == 0 || j == 0 || i == n || j == n;
+      float px = origin + cell * i + (border ? 0.f : 0.5f * jitter(rng));
+      float py = origin + cell * j + (border ? 0.f : 0.5f * jitter(rng));
+      p.push_back(pixel_to_world(px, py, res));
+    }
+  std::vector<Vec3i> lower, upper, all;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      int a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;  // a top-left, d bottom-right
+      lower.push_back({c, d, b});
+      upper.push_back({a, c, b});
+    }
+  all = lower;
+  all.insert(all.end(), upper.begin(), upper.end());
+  RasterBuffer l = rasterize(p, lower, cam), u = rasterize(p, upper, cam), both = rasterize(p, all, cam);
+  long double_covered = 0, holes = 0, mismatched = 0;
+  for (int y = 0; y < res; ++y)
+    for (int x = 0; x < res; ++x) {
+      size_t i = size_t(y) * res + x;
+      // The square spans pixel coordinates [16, 496]: centres 16.5 .. 495.5 are inside.
+      bool inside = x >= origin && x < origin + n * cell && y >= origin && y < origin + n * cell;
+      double_covered += l.covered(i) && u.covered(i);
+      holes += inside && !(l.covered(i) || u.covered(i));
+      mismatched += both.covered(i) != inside;
+    }
+  EXPECT_EQ(double_covered, 0);
+  EXPECT_EQ(holes, 0);
+  EXPECT_EQ(mismatched, 0);
 }
