@@ -20,10 +20,9 @@
 
 #include "core/camera.h"
 #include "core/image.h"
+#include "render/shade.h"  // NormalSpace
 
 namespace u3d {
-
-enum class NormalSpace { World, Camera };
 
 // Parses "world" / "camera"; throws Error otherwise.
 NormalSpace parse_normal_space(const std::string& text);
