@@ -38,3 +38,29 @@ inline ViewSet sphere_views(float radius, int resolution,
 }
 
 }  // namespace u3d::testing
+
+#include <filesystem>
+
+namespace u3d::testing {
+
+// Writes a view set's images as the 8 PNG files of a VIEWS_DIR (normals re-encoded as (n+1)/2).
+inline void write_view_set(const ViewSet& views, const std::filesystem::path& dir) {
+  std::filesystem::create_directories(dir);
+  for (View v : kAllViews) {
+    save_image(views[v].rgb, dir / view_file_name(v, false));
+    Image encoded = views[v].normals;
+    for (size_t p = 0; p < encoded.pixel_count(); ++p)
+      for (int c = 0; c < 3; ++c) encoded.data[p * 4 + c] = 0.5f * (encoded.data[p * 4 + c] + 1.f);
+    save_image(encoded, dir / view_file_name(v, true));
+  }
+}
+
+// A fresh empty folder under the system temp folder.
+inline std::filesystem::path fresh_temp_dir(const std::string& name) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("u3d_isomer_" + name);
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+}  // namespace u3d::testing
