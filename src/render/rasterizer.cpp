@@ -14,6 +14,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 #include "core/error.h"
 
@@ -74,8 +75,7 @@ struct ScreenTriangle {
   float depth[3];
   int32_t face;
   int32_t corners;                 // kCornersIdentity/kCornersSwapped, or index into clipped corner table
-  int16_t px0, py0, px1, py1;      // covered pixel range, inclusive; px0 > px1 = nothing to draw
-  bool empty() const { return px0 > px1; }
+  int16_t px0, py0, px1, py1;      // pixel range that may be covered, inclusive, never empty
 };
 
 // Barycentrics (b1, b2) w.r.t. the original face of the three vertices of a clipped sub-triangle.
@@ -251,74 +251,90 @@ RasterBuffer rasterize(const std::vector<Vec3f>& positions, const std::vector<Ve
   require(first_bad_face == nf, "rasterize: face " + std::to_string(first_bad_face) + " references a vertex outside [0, " +
                                     std::to_string(nv) + ")");
 
-  // 1. Vertices.
-  std::vector<Vec4f> clip(nv);
-  std::vector<float> vertex_depth(nv);
+  // 1. Vertices. Clip coordinates are recomputed (by the same function) for the rare clipped faces
+  // rather than stored for all vertices.
+  auto vertex_clip = [&](int64_t i) -> ClipVertex {
+    const Vec4f p(positions[i].x(), positions[i].y(), positions[i].z(), 1.f);
+    return {world_to_clip * p, depth_row.dot(p), Vec2f::Zero()};
+  };
   std::vector<uint8_t> outcode(nv);
   std::vector<ScreenVertex> screen(nv);
 #pragma omp parallel for schedule(static) if (nv > kMinParallelWork)
   for (int64_t i = 0; i < nv; ++i) {
-    const Vec4f p(positions[i].x(), positions[i].y(), positions[i].z(), 1.f);
-    clip[i] = world_to_clip * p;
-    vertex_depth[i] = depth_row.dot(p);
-    outcode[i] = planes.outcode(clip[i]);
-    if (outcode[i] == 0) screen[i] = to_screen(clip[i], vertex_depth[i], width, height);
+    ClipVertex v = vertex_clip(i);
+    outcode[i] = planes.outcode(v.clip);
+    if (outcode[i] == 0) screen[i] = to_screen(v.clip, v.depth, width, height);
   }
 
-  // 2. Faces. Unclipped faces keep their index; clipped sub-triangles are appended per chunk.
+  // 2. Faces -> screen triangles. Chunk c compacts its (at most one per face) triangles at the start
+  // of its own range of `tris`, so only pages holding real triangles get touched; clipped
+  // sub-triangles (up to 7 per face) go to a per-chunk overflow list.
   const int chunks = std::max(1, omp_get_max_threads());
-  std::vector<ScreenTriangle> tris(nf);
+  auto chunk_begin = [](int64_t n, int c, int count) { return n * c / count; };
+  std::unique_ptr<ScreenTriangle[]> tris(new ScreenTriangle[size_t(nf)]);  // deliberately uninitialized
+  std::vector<int64_t> chunk_size(chunks, 0);
   std::vector<std::vector<ScreenTriangle>> clipped(chunks);
   std::vector<std::vector<CornerBary>> clipped_corners(chunks);
-  auto chunk_begin = [](int64_t n, int c, int count) { return n * c / count; };
 #pragma omp parallel if (nf > kMinParallelWork)
   {
     for (int c = omp_get_thread_num(); c < chunks; c += omp_get_num_threads()) {
+      ScreenTriangle* out = tris.get() + chunk_begin(nf, c, chunks);
+      int64_t n = 0;
       for (int64_t f = chunk_begin(nf, c, chunks), end = chunk_begin(nf, c + 1, chunks); f < end; ++f) {
-        ScreenTriangle& t = tris[f];
-        t.px0 = 1;
-        t.px1 = 0;
         const Vec3i& ids = faces[f];
-        uint8_t any = outcode[ids[0]] | outcode[ids[1]] | outcode[ids[2]];
-        if (any == 0) {
+        const uint8_t o0 = outcode[ids[0]], o1 = outcode[ids[1]], o2 = outcode[ids[2]];
+        if ((o0 | o1 | o2) == 0) {
           ScreenVertex v[3] = {screen[ids[0]], screen[ids[1]], screen[ids[2]]};
-          setup_triangle(v, int32_t(f), kCornersIdentity, width, height, options.cull_backfaces, t, nullptr);
-        } else if ((outcode[ids[0]] & outcode[ids[1]] & outcode[ids[2]]) == 0) {
-          std::array<ClipVertex, 3> fv;
-          const Vec2f corner_bary[3] = {{0.f, 0.f}, {1.f, 0.f}, {0.f, 1.f}};
-          for (int k = 0; k < 3; ++k) fv[k] = {clip[ids[k]], vertex_depth[ids[k]], corner_bary[k]};
-          clip_face(fv, any, planes, int32_t(f), width, height, options.cull_backfaces, clipped[c],
+          n += setup_triangle(v, int32_t(f), kCornersIdentity, width, height, options.cull_backfaces, out[n], nullptr);
+        } else if ((o0 & o1 & o2) == 0) {  // partly inside: clip; wholly outside one plane: drop
+          std::array<ClipVertex, 3> fv = {vertex_clip(ids[0]), vertex_clip(ids[1]), vertex_clip(ids[2])};
+          fv[1].bary = Vec2f(1.f, 0.f);
+          fv[2].bary = Vec2f(0.f, 1.f);
+          clip_face(fv, o0 | o1 | o2, planes, int32_t(f), width, height, options.cull_backfaces, clipped[c],
                     clipped_corners[c]);
         }
       }
+      chunk_size[c] = n;
     }
   }
-  // Corner indices were chunk-local; make them global and append the clipped triangles.
+  // Clipped triangles get indices nf, nf + 1, ... in chunk order; their corner indices become global.
+  std::vector<ScreenTriangle> extra;
   std::vector<CornerBary> corners;
+  std::vector<int64_t> extra_begin(chunks + 1, 0);
   for (int c = 0; c < chunks; ++c) {
-    int32_t base = int32_t(corners.size());
+    extra_begin[c] = int64_t(extra.size());
+    const int32_t base = int32_t(corners.size());
     for (auto& t : clipped[c]) t.corners += base;
     corners.insert(corners.end(), clipped_corners[c].begin(), clipped_corners[c].end());
-    tris.insert(tris.end(), clipped[c].begin(), clipped[c].end());
+    extra.insert(extra.end(), clipped[c].begin(), clipped[c].end());
   }
+  extra_begin[chunks] = int64_t(extra.size());
   clipped.clear();
   clipped_corners.clear();
+  auto triangle = [&](int64_t index) -> const ScreenTriangle& {
+    return index < nf ? tris[index] : extra[index - nf];
+  };
+  // Calls fn(index) for the triangles of chunk c, in a fixed order.
+  auto for_each_triangle_of_chunk = [&](int c, auto&& fn) {
+    for (int64_t i = chunk_begin(nf, c, chunks), end = i + chunk_size[c]; i < end; ++i) fn(i);
+    for (int64_t j = extra_begin[c]; j < extra_begin[c + 1]; ++j) fn(nf + j);
+  };
+  int64_t triangle_count = int64_t(extra.size());
+  for (int64_t n : chunk_size) triangle_count += n;
 
   // 3. Binning: count per (chunk, tile), prefix-sum in (tile, chunk) order, fill.
   const int tiles_x = (width + kTileSize - 1) / kTileSize, tiles_y = (height + kTileSize - 1) / kTileSize;
   const size_t tile_count = size_t(tiles_x) * tiles_y;
-  const int64_t nt = int64_t(tris.size());
   std::vector<uint32_t> counts(size_t(chunks) * tile_count, 0);
   auto for_each_tile_of = [&](const ScreenTriangle& t, auto&& fn) {
     for (int ty = t.py0 >> kTileBits; ty <= (t.py1 >> kTileBits); ++ty)
       for (int tx = t.px0 >> kTileBits; tx <= (t.px1 >> kTileBits); ++tx) fn(size_t(ty) * tiles_x + tx);
   };
-#pragma omp parallel if (nt > kMinParallelWork)
+#pragma omp parallel if (triangle_count > kMinParallelWork)
   {
     for (int c = omp_get_thread_num(); c < chunks; c += omp_get_num_threads()) {
       uint32_t* count = counts.data() + size_t(c) * tile_count;
-      for (int64_t i = chunk_begin(nt, c, chunks), end = chunk_begin(nt, c + 1, chunks); i < end; ++i)
-        if (!tris[i].empty()) for_each_tile_of(tris[i], [&](size_t tile) { ++count[tile]; });
+      for_each_triangle_of_chunk(c, [&](int64_t i) { for_each_tile_of(triangle(i), [&](size_t tile) { ++count[tile]; }); });
     }
   }
   std::vector<size_t> tile_start(tile_count + 1);
@@ -333,12 +349,13 @@ RasterBuffer rasterize(const std::vector<Vec3f>& positions, const std::vector<Ve
   }
   tile_start[tile_count] = total;
   std::vector<int32_t> bins(total);
-#pragma omp parallel if (nt > kMinParallelWork)
+#pragma omp parallel if (triangle_count > kMinParallelWork)
   {
     for (int c = omp_get_thread_num(); c < chunks; c += omp_get_num_threads()) {
       size_t* cur = cursor.data() + size_t(c) * tile_count;
-      for (int64_t i = chunk_begin(nt, c, chunks), end = chunk_begin(nt, c + 1, chunks); i < end; ++i)
-        if (!tris[i].empty()) for_each_tile_of(tris[i], [&](size_t tile) { bins[cur[tile]++] = int32_t(i); });
+      for_each_triangle_of_chunk(c, [&](int64_t i) {
+        for_each_tile_of(triangle(i), [&](size_t tile) { bins[cur[tile]++] = int32_t(i); });
+      });
     }
   }
 
@@ -362,7 +379,7 @@ RasterBuffer rasterize(const std::vector<Vec3f>& positions, const std::vector<Ve
                 std::numeric_limits<float>::infinity());
     }
     for (size_t k = tile_start[tile]; k < tile_start[tile + 1]; ++k)
-      draw_in_tile(tris[bins[k]], corners.data(), x0, y0, x1, y1, buf);
+      draw_in_tile(triangle(bins[k]), corners.data(), x0, y0, x1, y1, buf);
   }
   return buf;
 }

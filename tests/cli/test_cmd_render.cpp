@@ -1,0 +1,105 @@
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "core/image.h"
+#include "io/mesh_io.h"
+#include "render/render_view.h"
+#include "render/test_meshes.h"
+
+using namespace u3d;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct RenderCliTest : ::testing::Test {
+  fs::path dir;
+  void SetUp() override {
+    dir = fs::temp_directory_path() / ("u3d_render_cli_" + std::to_string(::getpid()) + "_" +
+                                       ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+  }
+  void TearDown() override { fs::remove_all(dir); }
+
+  int run(const std::string& args) {
+    std::string cmd = std::string(UNIQUE3D_CLI) + " --quiet render " + args + " > " + (dir / "log.txt").string() + " 2>&1";
+    return WEXITSTATUS(std::system(cmd.c_str()));
+  }
+  std::string log() const {
+    FILE* f = std::fopen((dir / "log.txt").c_str(), "r");
+    std::string s;
+    if (!f) return s;
+    char buf[4096];
+    size_t n;
+    while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) s.append(buf, n);
+    std::fclose(f);
+    return s;
+  }
+};
+
+float max_abs_difference(const Image& a, const Image& b) {
+  EXPECT_EQ(a.width, b.width);
+  EXPECT_EQ(a.channels, b.channels);
+  float d = 0;
+  for (size_t i = 0; i < std::min(a.data.size(), b.data.size()); ++i) d = std::max(d, std::abs(a.data[i] - b.data[i]));
+  return d;
+}
+
+}  // namespace
+
+// The CLI writes the four views and turntable images, identical (up to 8-bit rounding) to
+// render_view of the normalized mesh.
+TEST_F(RenderCliTest, WritesFourViewsMatchingRenderView) {
+  Mesh mesh = test::bumpy_cube();
+  write_mesh(mesh, dir / "cube.obj");
+  ASSERT_EQ(run((dir / "cube.obj").string() + " -o " + (dir / "out").string() + " --res 48 --turntable 3"), 0) << log();
+  normalize_to_unit_box(mesh, 0.9f);
+  RenderSettings settings;
+  settings.ssaa = 2;
+  for (View v : kAllViews) {
+    RenderedView expected = render_view(mesh, view_camera(v, 48), settings);
+    Image rgb = load_image_rgba(dir / "out" / (std::string(view_name(v)) + "_rgb.png"));
+    Image normal = load_image_rgba(dir / "out" / (std::string(view_name(v)) + "_normal.png"));
+    EXPECT_LE(max_abs_difference(rgb, expected.rgb), 0.5f / 255 + 1e-6f) << view_name(v);
+    EXPECT_LE(max_abs_difference(normal, expected.normal), 0.5f / 255 + 1e-6f) << view_name(v);
+  }
+  for (const char* name : {"turntable_000.png", "turntable_001.png", "turntable_002.png"})
+    EXPECT_TRUE(fs::exists(dir / "out" / name)) << name;
+  EXPECT_FALSE(fs::exists(dir / "out" / "turntable_003.png"));
+}
+
+TEST_F(RenderCliTest, CameraSpaceNormalsWithoutNormalization) {
+  write_mesh(test::bumpy_cube(), dir / "cube.ply");
+  ASSERT_EQ(run((dir / "cube.ply").string() + " -o " + (dir / "out").string() +
+                " --res 32 --ssaa 1 --normal-space camera --no-normalize"),
+            0)
+      << log();
+  // Without normalization the cube keeps its size: the side facing each camera covers image
+  // point (0.3, -0.3), pixel (20, 20) of 32, and its camera-space normal is (0, 0, 1).
+  for (View v : kAllViews) {
+    Image normal = load_image_rgba(dir / "out" / (std::string(view_name(v)) + "_normal.png"));
+    EXPECT_NEAR(normal.at(20, 20, 0), 0.5f, 1.f / 255) << view_name(v);
+    EXPECT_NEAR(normal.at(20, 20, 1), 0.5f, 1.f / 255) << view_name(v);
+    EXPECT_NEAR(normal.at(20, 20, 2), 1.f, 1.f / 255) << view_name(v);
+    EXPECT_EQ(normal.at(20, 28, 3), 0.f) << view_name(v);  // below the cube (y = -0.78)
+  }
+}
+
+TEST_F(RenderCliTest, MissingMeshIsAClearError) {
+  EXPECT_EQ(run((dir / "nope.obj").string() + " -o " + (dir / "out").string()), 1);
+  EXPECT_NE(log().find("nope.obj"), std::string::npos) << log();
+}
+
+TEST_F(RenderCliTest, RejectsBadOptions) {
+  write_mesh(test::bumpy_cube(), dir / "cube.obj");
+  EXPECT_NE(run((dir / "cube.obj").string() + " -o " + (dir / "out").string() + " --normal-space tangent"), 0);
+  EXPECT_NE(run((dir / "cube.obj").string() + " -o " + (dir / "out").string() + " --res 0"), 0);
+  EXPECT_EQ(run((dir / "cube.obj").string() + " -o " + (dir / "out").string() + " --res 4096 --ssaa 4"), 1);
+  EXPECT_NE(log().find("8192"), std::string::npos) << log();
+}
