@@ -21,7 +21,9 @@ MeshTopology mesh_topology(const Mesh& mesh) {
   auto o3d = to_open3d(mesh);
   t.edge_manifold = o3d->IsEdgeManifold(true);
   t.vertex_manifold = o3d->IsVertexManifold();
-  t.watertight = o3d->IsWatertight();
+  // Open3D's IsWatertight also tests self-intersection (quadratic in the face count); closed here
+  // means what ISOMER needs: no boundary edge.
+  t.watertight = o3d->GetNonManifoldEdges(false).empty();
   t.components = int(std::get<1>(o3d->ClusterConnectedTriangles()).size());
   t.euler_characteristic = o3d->EulerPoincareCharacteristic();
   // Divergence theorem; valid for any closed surface, meaningful as an orientation check.

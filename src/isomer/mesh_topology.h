@@ -9,7 +9,7 @@ namespace u3d {
 struct MeshTopology {
   bool edge_manifold = false;    // every edge has at most two faces
   bool vertex_manifold = false;  // every vertex's faces form one fan
-  bool watertight = false;       // manifold and no boundary edge: closed
+  bool watertight = false;       // every edge has exactly two faces: closed (self-intersection not tested)
   int components = 0;            // connected pieces (by shared edges)
   int euler_characteristic = 0;  // V - E + F (2 per closed genus-0 piece)
   double volume = 0.0;           // signed enclosed volume; positive when faces wind outward

@@ -3,9 +3,9 @@
 #include <open3d/geometry/TriangleMesh.h>
 
 #include <algorithm>
-#include <set>
 
 #include "core/error.h"
+#include "isomer/mesh_repair.h"
 #include "isomer/open3d_bridge.h"
 
 namespace u3d {
@@ -53,10 +53,9 @@ Mesh smooth_and_subdivide(const Mesh& input, const SurfaceCleanupOptions& option
   smoothed.colors.clear();
   smooth_uniform_laplacian(smoothed, options.smooth_iterations);
 
+  // Loop subdivision needs a manifold (pymeshlab repairs non-manifold vertices and edges here too).
+  repair_to_closed_manifold(smoothed);
   auto mesh = to_open3d(smoothed);
-  mesh->RemoveDegenerateTriangles();
-  mesh->RemoveNonManifoldEdges();
-  mesh->RemoveUnreferencedVertices();
   const BoundingBox box = bounding_box(smoothed.positions);
   const double threshold = options.subdivision_threshold * double(box.extent().norm());
   for (int it = 0; it < options.subdivision_iterations && mean_edge_length(*mesh) > threshold; ++it)
