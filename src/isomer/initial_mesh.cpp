@@ -89,6 +89,9 @@ DepthSheets integrate_front_and_back(const ViewSet& views, const InitialMeshOpti
     require(std::count(mask.begin(), mask.end(), 1) > 0,
             std::string("initial mesh: the ") + view_name(v) + " mask vanishes at " + std::to_string(res) + " px");
     std::vector<float> h = integrate_normal_map(normals, mask, res, res, options.integration);
+    const Eigen::Matrix3f camera_to_world = view_camera(v, res).rotation().transpose();
+    for (Vec3f& n : normals) n = camera_to_world * n;
+    (v == View::Front ? sheets.front_normals : sheets.back_normals) = normals;
     // The rim is where front and back meet: pin it to zero height (as the official code does).
     for (int y = 0; y < res; ++y)
       for (int x = 0; x < res; ++x) {
@@ -124,7 +127,12 @@ Mesh build_initial_mesh(const ViewSet& views, const InitialMeshOptions& options)
             sheets.scale, joined);
   add_sheet(View::Back, sheets.resolution, sheets.back_height, sheets.back_mask, slab ? -sheets.z_min : -sheets.rim_z,
             sheets.scale, joined);
-  joined.ComputeVertexNormals();
+  // Point normals: the input normals. They agree with the sheets' own normals where the heights are
+  // right (scale 1), and at the rim they point sideways, which lets Poisson reach the silhouette.
+  for (const auto* list : {&sheets.front_normals, &sheets.back_normals})
+    for (size_t i = 0; i < list->size(); ++i)
+      if ((list == &sheets.front_normals ? sheets.front_mask : sheets.back_mask)[i])
+        joined.vertex_normals_.push_back((*list)[i].cast<double>());
 
   open3d::geometry::PointCloud points;
   points.points_ = joined.vertices_;

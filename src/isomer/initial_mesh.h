@@ -32,6 +32,7 @@ struct DepthSheets {
   int resolution = 0;
   std::vector<float> front_height, back_height;  // world units toward each view's camera, 0 outside
   std::vector<uint8_t> front_mask, back_mask;
+  std::vector<Vec3f> front_normals, back_normals;  // world-space input normals
   float z_min = 0.f, z_max = 0.f;  // object depth range from the side views
   float scale = 1.f;               // s: applied to both height maps
   float rim_z = 0.f;               // z0: world z of the silhouette rim

@@ -68,7 +68,6 @@ MeshRepairReport repair_to_closed_manifold(Mesh& mesh, int max_passes) {
     report.faces_removed += before - o3d->triangles_.size();
     mesh = from_open3d(*o3d);
     report.holes_filled += fill_boundary_loops(mesh);
-    { auto t = mesh_topology(mesh); auto o = to_open3d(mesh); fprintf(stderr, "DEBUG pass %d: %s nme %zu nmv %zu bnd %zu removed %zu filled %zu\n", pass, t.summary().c_str(), o->GetNonManifoldEdges(true).size(), o->GetNonManifoldVertices().size(), o->GetNonManifoldEdges(false).size(), report.faces_removed, report.holes_filled); }
     if (mesh_topology(mesh).closed_manifold()) {
       report.closed_manifold = true;
       break;
