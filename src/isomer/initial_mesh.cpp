@@ -9,7 +9,6 @@
 
 #include "core/error.h"
 #include "core/progress.h"
-#include "isomer/mesh_topology.h"
 #include "isomer/open3d_bridge.h"
 
 namespace u3d {
@@ -160,9 +159,6 @@ Mesh build_initial_mesh(const ViewSet& views, const InitialMeshOptions& options)
 
   Mesh mesh = from_open3d(*simplified);
   require(!mesh.faces.empty(), "initial mesh: decimation left no faces");
-  // Poisson orients faces by the point normals (outward); make sure, since everything after relies on it.
-  if (mesh_topology(mesh).volume < 0)
-    for (Vec3i& f : mesh.faces) std::swap(f[1], f[2]);
   return mesh;
 }
 
