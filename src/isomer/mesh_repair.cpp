@@ -1,0 +1,106 @@
+#include "isomer/mesh_repair.h"
+
+#include <open3d/geometry/TriangleMesh.h>
+
+#include <Eigen/Geometry>
+#include <map>
+#include <set>
+
+#include "isomer/mesh_topology.h"
+#include "isomer/open3d_bridge.h"
+
+namespace u3d {
+namespace {
+
+// Boundary edges are the directed face edges whose undirected edge has one face. Where a vertex
+// starts more than one of them (two holes touching at a vertex) its faces are removed, widening the
+// holes into simple loops; returns false then. Otherwise every simple boundary loop is closed by a
+// fan around its centroid and the function returns true.
+bool fill_boundary_loops(Mesh& mesh, size_t& faces_removed, size_t& holes_filled) {
+  std::map<std::pair<int, int>, int> uses;  // undirected edge -> face count
+  for (const Vec3i& f : mesh.faces)
+    for (int k = 0; k < 3; ++k) ++uses[std::minmax(f[k], f[(k + 1) % 3])];
+  std::map<int, int> next;
+  std::set<int> pinched;
+  for (const Vec3i& f : mesh.faces)
+    for (int k = 0; k < 3; ++k)
+      if (uses[std::minmax(f[k], f[(k + 1) % 3])] == 1 && !next.emplace(f[k], f[(k + 1) % 3]).second)
+        pinched.insert(f[k]);
+  if (!pinched.empty()) {
+    const size_t before = mesh.faces.size();
+    std::erase_if(mesh.faces, [&](const Vec3i& f) { return pinched.count(f[0]) || pinched.count(f[1]) || pinched.count(f[2]); });
+    faces_removed += before - mesh.faces.size();
+    return false;
+  }
+  while (!next.empty()) {
+    std::vector<int> loop;
+    const int start = next.begin()->first;
+    int v = start;
+    while (next.count(v)) {
+      loop.push_back(v);
+      const int w = next[v];
+      next.erase(v);
+      v = w;
+    }
+    if (v != start || loop.size() < 3) continue;  // not a closed loop: left for the next pass
+    Vec3f centroid(0, 0, 0);
+    for (int i : loop) centroid += mesh.positions[i];
+    const int c = int(mesh.positions.size());
+    mesh.positions.push_back(centroid / float(loop.size()));
+    if (mesh.has_colors()) mesh.colors.push_back(mesh.colors[loop[0]]);
+    for (size_t i = 0; i < loop.size(); ++i) mesh.faces.push_back({loop[(i + 1) % loop.size()], loop[i], c});
+    ++holes_filled;
+  }
+  return true;
+}
+
+// OrientTriangles makes each piece consistent but may turn a piece inside out: flip every piece whose
+// enclosed volume is negative.
+void orient_outward(Mesh& mesh) {
+  auto o3d = to_open3d(mesh);
+  const std::vector<int> piece = std::get<0>(o3d->ClusterConnectedTriangles());
+  std::map<int, double> volume;
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    const Vec3i& t = mesh.faces[f];
+    volume[piece[f]] += mesh.positions[t[0]].cast<double>().dot(
+        mesh.positions[t[1]].cast<double>().cross(mesh.positions[t[2]].cast<double>()));
+  }
+  for (size_t f = 0; f < mesh.faces.size(); ++f)
+    if (volume[piece[f]] < 0) std::swap(mesh.faces[f][1], mesh.faces[f][2]);
+}
+
+}  // namespace
+
+MeshRepairReport repair_to_closed_manifold(Mesh& mesh, int max_passes) {
+  MeshRepairReport report;
+  for (int pass = 0; pass < max_passes; ++pass) {
+    auto o3d = to_open3d(mesh);
+    o3d->RemoveDuplicatedVertices();
+    o3d->RemoveDuplicatedTriangles();
+    o3d->RemoveDegenerateTriangles();
+    const size_t before = o3d->triangles_.size();
+    o3d->RemoveNonManifoldEdges();
+    // Bow-tie vertices: drop their faces, the holes are closed below.
+    const std::vector<int> bad_vertices = o3d->GetNonManifoldVertices();
+    if (!bad_vertices.empty()) {
+      const std::set<int> bad(bad_vertices.begin(), bad_vertices.end());
+      std::vector<bool> drop(o3d->triangles_.size(), false);
+      for (size_t f = 0; f < drop.size(); ++f)
+        for (int k = 0; k < 3; ++k) drop[f] = drop[f] || bad.count(o3d->triangles_[f][k]);
+      o3d->RemoveTrianglesByMask(drop);
+    }
+    o3d->RemoveUnreferencedVertices();
+    o3d->OrientTriangles();  // decimation can flip single faces
+    report.faces_removed += before - o3d->triangles_.size();
+    mesh = from_open3d(*o3d);
+    fill_boundary_loops(mesh, report.faces_removed, report.holes_filled);
+    if (mesh_topology(mesh).closed_manifold()) {
+      report.closed_manifold = true;
+      break;
+    }
+  }
+  orient_outward(mesh);
+  return report;
+}
+
+}  // namespace u3d

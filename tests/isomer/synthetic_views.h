@@ -1,0 +1,66 @@
+#pragma once
+// Analytic view sets for the isomer tests: the four orthographic views of a sphere centred at the
+// origin, rendered exactly (no rasterizer involved).
+#include <cmath>
+#include <functional>
+
+#include "isomer/view_set.h"
+
+namespace u3d::testing {
+
+// colour(view, world normal) gives the RGB of a foreground pixel.
+inline ViewSet sphere_views(float radius, int resolution,
+                            const std::function<Vec3f(View, const Vec3f&)>& colour = nullptr) {
+  std::array<Image, 4> rgb, normal_maps;
+  std::array<std::string, 4> rgb_names, normal_names;
+  for (View v : kAllViews) {
+    const size_t k = size_t(v);
+    const Eigen::Matrix3f camera_to_world = view_camera(v, resolution).rotation().transpose();
+    Image& c = rgb[k] = Image(resolution, resolution, 4, 0.f);
+    Image& n = normal_maps[k] = Image(resolution, resolution, 4, 0.f);
+    for (int y = 0; y < resolution; ++y)
+      for (int x = 0; x < resolution; ++x) {
+        const float cx = (x + 0.5f) * 2.f / resolution - 1.f, cy = 1.f - (y + 0.5f) * 2.f / resolution;
+        const float r2 = cx * cx + cy * cy;
+        if (r2 >= radius * radius) continue;
+        const Vec3f world = camera_to_world * Vec3f(cx, cy, std::sqrt(radius * radius - r2)) / radius;
+        const Vec3f col = colour ? colour(v, world) : Vec3f(0.8f, 0.5f, 0.2f);
+        for (int i = 0; i < 3; ++i) {
+          n.at(x, y, i) = 0.5f * (world[i] + 1.f);
+          c.at(x, y, i) = col[i];
+        }
+        n.at(x, y, 3) = c.at(x, y, 3) = 1.f;
+      }
+    rgb_names[k] = view_file_name(v, false);
+    normal_names[k] = view_file_name(v, true);
+  }
+  return make_view_set(rgb, normal_maps, NormalSpace::World, rgb_names, normal_names);
+}
+
+}  // namespace u3d::testing
+
+#include <filesystem>
+
+namespace u3d::testing {
+
+// Writes a view set's images as the 8 PNG files of a VIEWS_DIR (normals re-encoded as (n+1)/2).
+inline void write_view_set(const ViewSet& views, const std::filesystem::path& dir) {
+  std::filesystem::create_directories(dir);
+  for (View v : kAllViews) {
+    save_image(views[v].rgb, dir / view_file_name(v, false));
+    Image encoded = views[v].normals;
+    for (size_t p = 0; p < encoded.pixel_count(); ++p)
+      for (int c = 0; c < 3; ++c) encoded.data[p * 4 + c] = 0.5f * (encoded.data[p * 4 + c] + 1.f);
+    save_image(encoded, dir / view_file_name(v, true));
+  }
+}
+
+// A fresh empty folder under the system temp folder.
+inline std::filesystem::path fresh_temp_dir(const std::string& name) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("u3d_isomer_" + name);
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+}  // namespace u3d::testing

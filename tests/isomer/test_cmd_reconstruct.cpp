@@ -1,0 +1,95 @@
+// `unique3d reconstruct` end to end: a sphere's views give a closed coloured mesh matching the
+// silhouettes; every bad input gives a clear message, a non-zero exit and no output file.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "io/mesh_io.h"
+#include "isomer/mesh_topology.h"
+#include "synthetic_views.h"
+
+namespace u3d {
+namespace {
+
+struct CliResult {
+  int status = -1;
+  std::string output;  // stdout and stderr
+};
+
+CliResult run_cli(const std::string& args, const std::filesystem::path& log) {
+  const std::string cmd = std::string(UNIQUE3D_CLI) + " reconstruct " + args + " > " + log.string() + " 2>&1";
+  CliResult r;
+  r.status = std::system(cmd.c_str());
+  std::ifstream in(log);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  r.output = ss.str();
+  return r;
+}
+
+TEST(ReconstructCli, SphereGivesClosedColouredMeshMatchingTheSilhouettes) {
+  const auto dir = testing::fresh_temp_dir("cli_sphere");
+  testing::write_view_set(testing::sphere_views(0.6f, 192), dir / "views");
+  const auto out = dir / "sphere.glb";
+  const CliResult r = run_cli((dir / "views").string() + " -o " + out.string() + " --preview --visibility-resolution 512",
+                              dir / "log.txt");
+  ASSERT_EQ(r.status, 0) << r.output;
+  ASSERT_TRUE(std::filesystem::exists(out));
+  EXPECT_TRUE(std::filesystem::exists(dir / "sphere_views.png"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "sphere_turntable.png"));
+  const Mesh mesh = read_mesh(out);
+  EXPECT_TRUE(mesh.has_colors());
+  EXPECT_TRUE(mesh_topology(mesh).closed_manifold());
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.output, m,
+                                std::regex("silhouette IoU: front ([0-9.]+), right ([0-9.]+), back ([0-9.]+), left ([0-9.]+)")))
+      << r.output;
+  for (int k = 1; k <= 4; ++k) EXPECT_GE(std::stod(m[k]), 0.95) << r.output;
+  std::printf("%s", r.output.substr(r.output.find("\nmesh:") + 1).c_str());
+}
+
+TEST(ReconstructCli, BadInputFailsCleanlyAndWritesNothing) {
+  const ViewSet good = testing::sphere_views(0.6f, 64);
+  auto expect_failure = [&](const std::string& name, const std::function<void(const std::filesystem::path&)>& spoil,
+                            const std::string& expected) {
+    const auto dir = testing::fresh_temp_dir("cli_bad_" + name);
+    testing::write_view_set(good, dir / "views");
+    spoil(dir / "views");
+    const auto out = dir / "out.glb";
+    const CliResult r = run_cli((dir / "views").string() + " -o " + out.string() + " --preview", dir / "log.txt");
+    EXPECT_NE(r.status, 0) << name;
+    EXPECT_NE(r.output.find("unique3d: error: "), std::string::npos) << name << ": " << r.output;
+    EXPECT_NE(r.output.find(expected), std::string::npos) << name << ": " << r.output;
+    for (const auto& entry : std::filesystem::directory_iterator(dir))
+      EXPECT_TRUE(entry.path().filename() == "views" || entry.path().filename() == "log.txt")
+          << name << ": wrote " << entry.path();
+  };
+  expect_failure("missing", [](auto& d) { std::filesystem::remove(d / "front_rgb.png"); }, "lacks front_rgb.png");
+  expect_failure("size", [&](auto& d) { save_image(resize_image(good[View::Left].normals, 48, 48), d / "left_normal.png"); },
+                 "size mismatch");
+  expect_failure("empty_mask", [&](auto& d) { save_image(Image(64, 64, 4, 0.f), d / "right_rgb.png"); }, "mask is empty");
+  expect_failure("full_mask", [&](auto& d) { save_image(Image(64, 64, 4, 1.f), d / "back_rgb.png"); },
+                 "covers the whole image");
+  expect_failure("black_normals", [&](auto& d) { save_image(Image(64, 64, 3, 0.f), d / "front_normal.png"); },
+                 "all black");
+  expect_failure("not_png", [&](auto& d) { std::ofstream(d / "left_rgb.png") << "GIF89a"; }, "not a PNG");
+  expect_failure("jpeg", [&](auto& d) {
+    save_image(good[View::Front].rgb, d / "front.jpg");
+    std::filesystem::rename(d / "front.jpg", d / "front_rgb.png");
+  }, "not a PNG");
+}
+
+TEST(ReconstructCli, RejectsUnknownOutputFormatBeforeWork) {
+  const auto dir = testing::fresh_temp_dir("cli_ext");
+  testing::write_view_set(testing::sphere_views(0.6f, 64), dir / "views");
+  const CliResult r = run_cli((dir / "views").string() + " -o " + (dir / "out.stl").string(), dir / "log.txt");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("unsupported extension"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out.stl"));
+}
+
+}  // namespace
+}  // namespace u3d
