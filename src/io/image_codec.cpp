@@ -1,0 +1,52 @@
+#include "io/image_codec.h"
+
+#include <cmath>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "core/error.h"
+
+namespace u3d {
+
+Image decode_image(const unsigned char* bytes, size_t size, const std::string& what) {
+  require(size > 0, "cannot decode " + what + ": no image data");
+  cv::Mat encoded(1, int(size), CV_8U, const_cast<unsigned char*>(bytes));
+  cv::Mat m;
+  try {
+    m = cv::imdecode(encoded, cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception& e) {
+    throw Error("cannot decode " + what + ": " + e.what());
+  }
+  require(!m.empty(), "cannot decode " + what + " (corrupt or not a PNG/JPEG image)");
+  double scale = 0;
+  switch (m.depth()) {
+    case CV_8U: scale = 1.0 / 255.0; break;
+    case CV_16U: scale = 1.0 / 65535.0; break;
+    default: throw Error("unsupported pixel depth in " + what + " (use 8- or 16-bit PNG/JPEG)");
+  }
+  cv::Mat f;
+  m.convertTo(f, CV_32F, scale);
+  if (f.channels() == 3) cv::cvtColor(f, f, cv::COLOR_BGR2RGB);
+  else if (f.channels() == 4) cv::cvtColor(f, f, cv::COLOR_BGRA2RGBA);
+  else require(f.channels() == 1, "unsupported channel count " + std::to_string(f.channels()) + " in " + what);
+  Image image(f.cols, f.rows, f.channels());
+  f.copyTo(cv::Mat(f.rows, f.cols, CV_32FC(f.channels()), image.data.data()));
+  return image;
+}
+
+std::vector<unsigned char> encode_png(const Image& image, const std::string& what) {
+  require(!image.empty() && image.width > 0 && image.height > 0, "cannot encode empty " + what);
+  require(image.channels == 1 || image.channels == 3 || image.channels == 4,
+          "cannot encode " + what + " with " + std::to_string(image.channels) + " channels");
+  for (float v : image.data) require(!std::isnan(v), "refusing to encode " + what + " with NaN values");
+  cv::Mat f = cv::Mat(image.height, image.width, CV_32FC(image.channels), const_cast<float*>(image.data.data())).clone();
+  if (image.channels == 3) cv::cvtColor(f, f, cv::COLOR_RGB2BGR);
+  else if (image.channels == 4) cv::cvtColor(f, f, cv::COLOR_RGBA2BGRA);
+  cv::Mat bytes8;
+  f.convertTo(bytes8, CV_8U, 255.0);  // saturating and rounding
+  std::vector<unsigned char> out;
+  require(cv::imencode(".png", bytes8, out), "cannot encode " + what + " as PNG");
+  return out;
+}
+
+}  // namespace u3d

@@ -1,0 +1,77 @@
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+namespace fs = std::filesystem;
+using namespace u3d;
+
+namespace {
+
+fs::path fresh_dir(const std::string& name) {
+  fs::path d = fs::temp_directory_path() / ("u3d_test_atomic_" + std::to_string(::getpid())) / name;
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+size_t entries(const fs::path& dir) {
+  size_t n = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir)) ++n;
+  return n;
+}
+
+}  // namespace
+
+TEST(AtomicFile, ThrowingWriterLeavesNoFile) {
+  fs::path dir = fresh_dir("throwing");
+  EXPECT_THROW(write_atomically(dir / "out.txt",
+                                [](const fs::path& tmp) {
+                                  std::ofstream(tmp) << "half of the content";
+                                  throw std::runtime_error("writer failed midway");
+                                }),
+               std::runtime_error);
+  EXPECT_EQ(entries(dir), 0u) << "neither the target nor the temporary file may remain";
+}
+
+TEST(AtomicFile, ThrowingWriterKeepsThePreviousFile) {
+  fs::path dir = fresh_dir("keep");
+  std::ofstream(dir / "out.txt") << "old";
+  EXPECT_THROW(write_atomically(dir / "out.txt", [](const fs::path& tmp) {
+                 std::ofstream(tmp) << "new";
+                 throw Error("failed");
+               }),
+               Error);
+  std::ifstream in(dir / "out.txt");
+  std::string content((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(content, "old");
+  EXPECT_EQ(entries(dir), 1u);
+}
+
+TEST(AtomicFile, SuccessfulWriteReplacesTheTargetAndKeepsTheExtension) {
+  fs::path dir = fresh_dir("success");
+  fs::path seen;
+  write_atomically(dir / "out.png", [&](const fs::path& tmp) {
+    seen = tmp;
+    std::ofstream(tmp) << "data";
+  });
+  EXPECT_EQ(seen.extension(), ".png");
+  EXPECT_EQ(seen.parent_path(), dir);
+  EXPECT_TRUE(fs::exists(dir / "out.png"));
+  EXPECT_EQ(entries(dir), 1u);
+}
+
+TEST(AtomicFile, MissingFolderIsAClearError) {
+  fs::path dir = fresh_dir("missing");
+  try {
+    write_atomically(dir / "nope" / "out.txt", [](const fs::path&) { FAIL() << "writer must not run"; });
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("does not exist"), std::string::npos) << e.what();
+  }
+}

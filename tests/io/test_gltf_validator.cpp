@@ -1,0 +1,61 @@
+// The GLB files we write must pass the Khronos glTF validator (tools/validate_gltf.mjs) with no errors.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+
+#include "io/mesh_io.h"
+#include "io_test_util.h"
+
+namespace fs = std::filesystem;
+using namespace u3d;
+using namespace u3d::test;
+
+namespace {
+
+// Exit status of the validator script on `file`; its report goes to the test log.
+int validate(const fs::path& file) {
+  std::string command = "node \"" UNIQUE3D_SOURCE_DIR "/tools/validate_gltf.mjs\" \"" + file.string() + "\"";
+  int status = std::system(command.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+bool have_node() { return std::system("command -v node > /dev/null 2>&1") == 0; }
+
+}  // namespace
+
+TEST(GltfValidator, WrittenGlbFilesHaveNoErrors) {
+  if (!have_node()) GTEST_SKIP() << "node is not installed: cannot run the Khronos glTF validator";
+  fs::path dir = scratch_dir();
+
+  Mesh coloured = coloured_tetrahedron();
+  write_mesh(coloured, dir / "coloured.glb");
+  EXPECT_EQ(validate(dir / "coloured.glb"), 0);
+
+  write_mesh(two_material_quads(), dir / "textured.glb");
+  EXPECT_EQ(validate(dir / "textured.glb"), 0);
+
+  // Colours + UVs + an RGBA texture + a translucent untextured material + an isolated vertex (whose
+  // normal is undefined) + a degenerate face.
+  Mesh mixed = two_material_quads();
+  mixed.colors.assign(mixed.vertex_count(), Vec3f(0.2f, 0.4f, 0.6f));
+  mixed.materials[0].texture = gradient_texture(3, 3, 4, 5);
+  mixed.materials[1].texture = Image();
+  mixed.materials[1].base_color[3] = 0.5f;
+  mixed.positions.push_back(Vec3f(5, 5, 5));
+  mixed.colors.push_back(Vec3f(1, 1, 1));
+  mixed.uvs.push_back(Vec2f(0, 0));
+  mixed.faces.push_back(Vec3i(0, 0, 1));
+  mixed.face_material.push_back(1);
+  write_mesh(mixed, dir / "mixed.glb");
+  EXPECT_EQ(validate(dir / "mixed.glb"), 0);
+}
+
+// The check above only means something if the validator rejects broken files.
+TEST(GltfValidator, RejectsABrokenFile) {
+  if (!have_node()) GTEST_SKIP() << "node is not installed: cannot run the Khronos glTF validator";
+  fs::path dir = scratch_dir();
+  write_mesh(coloured_tetrahedron(), dir / "good.glb");
+  std::string bytes = read_file(dir / "good.glb");
+  write_file(dir / "broken.glb", bytes.substr(0, bytes.size() - 16));
+  EXPECT_NE(validate(dir / "broken.glb"), 0);
+}
