@@ -50,7 +50,10 @@ const CommandRegistration registration{
       sub.add_option("gt", a->gt_path, "Ground-truth mesh")->required()->check(CLI::ExistingFile);
       sub.add_option("--json", a->json_path, "Also write all metrics to this JSON file");
       sub.add_flag("--given-frame", a->given_frame,
-                   "Compare in the meshes' own frame instead of normalizing each to [-0.5, 0.5]");
+                   "Meshes share one frame: normalize both with the GT's transform instead of each on its own");
+      sub.add_option("--gt-render-fill", a->options.gt_render_fill,
+                     "With --given-frame: place the GT as `unique3d render --fill F` did (reconstructions from those views)")
+          ->check(CLI::PositiveNumber);
       sub.add_option("--samples", a->options.surface_samples, "Surface samples per mesh for Chamfer and F-score")
           ->capture_default_str()->check(CLI::Range(size_t(100), size_t(100000000)));
       sub.add_option("--fscore-thresholds", a->options.fscore_thresholds, "F-score distance thresholds")

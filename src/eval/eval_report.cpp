@@ -28,7 +28,8 @@ std::string format(const char* fmt, double value) {
 
 nlohmann::json report_to_json(const EvalReport& r) {
   nlohmann::json j;
-  j["frame"] = r.options.normalize ? "normalized" : "given";
+  j["frame"] = r.options.normalize ? "normalized" : "shared";
+  j["gt_render_fill"] = r.options.gt_render_fill;
   j["pred"] = mesh_json(r.pred);
   j["gt"] = mesh_json(r.gt);
   j["chamfer"] = {{"l1", r.chamfer.chamfer_l1},
@@ -72,7 +73,10 @@ nlohmann::json report_to_json(const EvalReport& r) {
 
 std::string report_summary(const EvalReport& r) {
   std::string s;
-  s += "frame:          " + std::string(r.options.normalize ? "each mesh normalized to [-0.5, 0.5]" : "as given") + "\n";
+  std::string frame = r.options.normalize ? "each mesh normalized to [-0.5, 0.5]"
+                                          : "shared (the GT's normalization to [-0.5, 0.5] applied to both)";
+  if (r.options.gt_render_fill > 0) frame += ", GT first placed as rendered with fill " + format("%g", r.options.gt_render_fill);
+  s += "frame:          " + frame + "\n";
   s += "faces:          pred " + std::to_string(r.pred.faces) + ", gt " + std::to_string(r.gt.faces) + "\n";
   s += "Chamfer-L1:     " + format("%.6f", r.chamfer.chamfer_l1) + "  (accuracy " +
        format("%.6f", r.chamfer.accuracy) + ", completeness " + format("%.6f", r.chamfer.completeness) + ")\n";

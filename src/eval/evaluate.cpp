@@ -23,9 +23,16 @@ EvalReport evaluate_meshes(Mesh pred, Mesh gt, const EvalOptions& options) {
     require(t > 0, "F-score thresholds must be positive, got " + std::to_string(t));
   EvalReport r;
   r.options = options;
+  require(options.gt_render_fill >= 0, "render fill must not be negative");
+  require(options.gt_render_fill == 0 || !options.normalize,
+          "placing the GT in a render frame only makes sense in the shared frame");
   if (options.normalize) {
     normalize_to_unit_box(pred, 0.5f);
     normalize_to_unit_box(gt, 0.5f);
+  } else {
+    if (options.gt_render_fill > 0) normalize_to_unit_box(gt, options.gt_render_fill);
+    Similarity s = normalize_to_unit_box(gt, 0.5f);
+    for (auto& p : pred.positions) p = s.scale * (p + s.offset);
   }
   r.pred = summarize(pred);
   r.gt = summarize(gt);

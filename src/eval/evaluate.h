@@ -16,10 +16,15 @@
 namespace u3d {
 
 struct EvalOptions {
-  // true: each mesh is centred and scaled so its longest bounding-box side spans [-0.5, 0.5] (the
-  // paper's protocol). false: both are compared in the frame they come in (reconstructions from
-  // known views share the GT frame).
+  // true: each mesh is centred and scaled on its own so its longest bounding-box side spans
+  // [-0.5, 0.5] (the paper's protocol: pose and scale errors of the prediction are forgiven).
+  // false ("shared frame"): the meshes are taken to share one frame, as reconstructions from known
+  // views do; the similarity that normalizes the GT is applied to both, so distances keep the same
+  // units as above while offsets and scale errors of the prediction count.
   bool normalize = true;
+  // Shared frame only: when > 0, the GT is first placed as `unique3d render --fill F` placed it
+  // before rendering the views (the frame a reconstruction from those views comes out in).
+  float gt_render_fill = 0;
   size_t surface_samples = 100000;  // per mesh
   std::vector<float> fscore_thresholds{0.01f, 0.02f, 0.05f};
   int iou_resolution = 64;

@@ -57,6 +57,27 @@ TEST(Evaluate, NormalizationRemovesScaleAndOffsetButTheGivenFrameKeepsThem) {
   EXPECT_FALSE(given.appearance.has_value());
 }
 
+TEST(Evaluate, SharedFrameCanPlaceTheGtLikeTheRenderer) {
+  set_progress_quiet(true);
+  // A perfect reconstruction from views rendered with fill 0.9 comes out 1.8 times the GT's unit size.
+  Mesh gt = colored_sphere(), pred = gt;
+  for (auto& p : gt.positions) p = 0.25f * p + Vec3f(5, 0, 0);
+  normalize_to_unit_box(pred, 0.9f);
+  EvalOptions o = quick_options();
+  o.appearance = false;
+  o.normalize = false;
+  o.gt_render_fill = 0.9f;
+  EvalReport r = evaluate_meshes(pred, gt, o);
+  EXPECT_LT(r.chamfer.chamfer_l1, 1e-5);
+  EXPECT_DOUBLE_EQ(r.iou.iou, 1.0);
+  // Half a unit off along x in the render frame is d = 0.5 / 1.8 in the evaluation frame; the mean
+  // distance of a sphere displaced by d (< radius) to the original is exactly d / 2.
+  for (auto& p : pred.positions) p.x() += 0.5f;
+  EXPECT_NEAR(evaluate_meshes(pred, gt, o).chamfer.accuracy, 0.25 / 1.8, 0.005);
+  o.normalize = true;
+  EXPECT_THROW(evaluate_meshes(pred, gt, o), Error);
+}
+
 TEST(Evaluate, OpenAndColourlessMeshesAreWarnedAbout) {
   set_progress_quiet(true);
   Mesh gt = colored_sphere(), pred = test::sphere_mesh(0.5f, 2);
