@@ -4,6 +4,8 @@
 // JSON table (per object and mean). Stages the CLI cannot run yet (a missing subcommand or flag) are
 // skipped and named in the table, never faked. Usage: bench_objects --help.
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>

@@ -1,6 +1,7 @@
 #include "eval/view_perturbation.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
