@@ -1,0 +1,68 @@
+// unique3d perturb VIEWS_DIR -o OUT_DIR: make the four views of a view set inconsistent on purpose.
+#include <cmath>
+#include <memory>
+
+#include "cli/command.h"
+#include "core/error.h"
+#include "eval/view_perturbation.h"
+
+namespace u3d::cli {
+namespace {
+
+struct PerturbArgs {
+  std::string in_dir, out_dir, normal_space = "world";
+  std::vector<std::string> rotations, scales;
+  PerturbOptions options;
+};
+
+// "right:3" -> (View::Right, 3).
+std::pair<View, float> parse_view_value(const std::string& spec, const char* option) {
+  auto colon = spec.find(':');
+  require(colon != std::string::npos, std::string(option) + " expects VIEW:VALUE (e.g. right:3), got '" + spec + "'");
+  std::string name = spec.substr(0, colon), value = spec.substr(colon + 1);
+  for (View v : kAllViews) {
+    if (name != view_name(v)) continue;
+    try {
+      size_t used = 0;
+      float x = std::stof(value, &used);
+      require(used == value.size() && std::isfinite(x), "");
+      return {v, x};
+    } catch (const std::exception&) {
+      throw Error(std::string(option) + ": '" + value + "' in '" + spec + "' is not a number");
+    }
+  }
+  throw Error(std::string(option) + ": unknown view '" + name + "' in '" + spec + "' (front, right, back, left)");
+}
+
+void run_perturb(PerturbArgs& a) {
+  for (const auto& spec : a.rotations) {
+    auto [v, deg] = parse_view_value(spec, "--rotate-view");
+    a.options.warps[int(v)].rotate_deg = deg;
+  }
+  for (const auto& spec : a.scales) {
+    auto [v, s] = parse_view_value(spec, "--scale-view");
+    require(s > 0, "--scale-view: scale must be positive in '" + spec + "'");
+    a.options.warps[int(v)].scale = s;
+  }
+  a.options.normal_space = a.normal_space == "camera" ? NormalSpace::Camera : NormalSpace::World;
+  perturb_view_set(a.in_dir, a.out_dir, a.options);
+}
+
+const CommandRegistration registration{
+    "perturb", "Make the four views of a view set inconsistent in controlled, reproducible ways",
+    [](CLI::App& sub) -> CommandAction {
+      auto a = std::make_shared<PerturbArgs>();
+      sub.add_option("views", a->in_dir, "Folder with <view>_rgb.png / <view>_normal.png")->required();
+      sub.add_option("-o,--output", a->out_dir, "Output folder")->required();
+      sub.add_option("--rotate-view", a->rotations, "VIEW:DEGREES in-plane roll (counter-clockwise), repeatable");
+      sub.add_option("--scale-view", a->scales, "VIEW:FACTOR zoom about the image centre, repeatable");
+      sub.add_option("--normal-noise", a->options.normal_noise, "Std. deviation of Gaussian noise per normal component")
+          ->check(CLI::Range(0.f, 10.f));
+      sub.add_option("--seed", a->options.seed, "Seed of the normal noise")->capture_default_str();
+      sub.add_option("--normal-space", a->normal_space, "Encoding of the input normal maps")
+          ->check(CLI::IsMember({"world", "camera"}))->capture_default_str();
+      return [a] { run_perturb(*a); };
+    }};
+
+}  // namespace
+}  // namespace u3d::cli

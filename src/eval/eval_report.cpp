@@ -1,0 +1,96 @@
+#include "eval/eval_report.h"
+
+#include <cstdio>
+
+#include "eval/image_metrics.h"
+
+namespace u3d {
+
+namespace {
+
+nlohmann::json mesh_json(const MeshSummary& m) {
+  return {{"vertices", m.vertices},
+          {"faces", m.faces},
+          {"has_color", m.has_color},
+          {"closed", m.diagnostics.closed()},
+          {"boundary_edges", m.diagnostics.boundary_edges},
+          {"nonmanifold_edges", m.diagnostics.nonmanifold_edges},
+          {"degenerate_faces", m.diagnostics.degenerate_faces}};
+}
+
+std::string format(const char* fmt, double value) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, fmt, value);
+  return buf;
+}
+
+}  // namespace
+
+nlohmann::json report_to_json(const EvalReport& r) {
+  nlohmann::json j;
+  j["frame"] = r.options.normalize ? "normalized" : "shared";
+  j["gt_render_fill"] = r.options.gt_render_fill;
+  j["pred"] = mesh_json(r.pred);
+  j["gt"] = mesh_json(r.gt);
+  j["chamfer"] = {{"l1", r.chamfer.chamfer_l1},
+                  {"l2", r.chamfer.chamfer_l2},
+                  {"accuracy", r.chamfer.accuracy},
+                  {"completeness", r.chamfer.completeness},
+                  {"samples_per_mesh", r.options.surface_samples},
+                  {"seed", r.options.seed}};
+  j["fscore"] = nlohmann::json::array();
+  for (const auto& f : r.fscores)
+    j["fscore"].push_back(
+        {{"threshold", f.threshold}, {"precision", f.precision}, {"recall", f.recall}, {"fscore", f.fscore}});
+  j["volume_iou"] = {{"iou", r.iou.iou},
+                     {"resolution", r.iou.resolution},
+                     {"pred_cells", r.iou.pred_cells},
+                     {"gt_cells", r.iou.gt_cells},
+                     {"intersection_cells", r.iou.intersection_cells},
+                     {"union_cells", r.iou.union_cells}};
+  if (r.appearance) {
+    const auto& a = *r.appearance;
+    nlohmann::json views = nlohmann::json::array();
+    for (const auto& v : a.views)
+      views.push_back({{"azimuth_deg", v.view.azimuth_deg},
+                       {"elevation_deg", v.view.elevation_deg},
+                       {"psnr", v.psnr},
+                       {"ssim", v.ssim}});
+    j["appearance"] = {{"psnr", a.psnr},
+                       {"ssim", a.ssim},
+                       {"psnr_cap_db", kPsnrCapDb},
+                       {"resolution", r.options.appearance_options.resolution},
+                       {"ssaa", r.options.appearance_options.ssaa},
+                       {"half_extent", a.half_extent},
+                       {"views", views}};
+  } else {
+    j["appearance"] = nullptr;
+  }
+  j["warnings"] = r.warnings;
+  j["seconds"] = {{"geometry", r.geometry_seconds}, {"appearance", r.appearance_seconds}};
+  return j;
+}
+
+std::string report_summary(const EvalReport& r) {
+  std::string s;
+  std::string frame = r.options.normalize ? "each mesh normalized to [-0.5, 0.5]"
+                                          : "shared (the GT's normalization to [-0.5, 0.5] applied to both)";
+  if (r.options.gt_render_fill > 0) frame += ", GT first placed as rendered with fill " + format("%g", r.options.gt_render_fill);
+  s += "frame:          " + frame + "\n";
+  s += "faces:          pred " + std::to_string(r.pred.faces) + ", gt " + std::to_string(r.gt.faces) + "\n";
+  s += "Chamfer-L1:     " + format("%.6f", r.chamfer.chamfer_l1) + "  (accuracy " +
+       format("%.6f", r.chamfer.accuracy) + ", completeness " + format("%.6f", r.chamfer.completeness) + ")\n";
+  s += "Chamfer-L2:     " + format("%.3e", r.chamfer.chamfer_l2) + "\n";
+  for (const auto& f : r.fscores)
+    s += "F-score@" + format("%-7g", f.threshold) + format("%.4f", f.fscore) + "  (precision " +
+         format("%.4f", f.precision) + ", recall " + format("%.4f", f.recall) + ")\n";
+  s += "volume IoU:     " + format("%.4f", r.iou.iou) + "  (" + std::to_string(r.iou.resolution) + "^3 grid)\n";
+  if (r.appearance) {
+    s += "PSNR:           " + format("%.3f", r.appearance->psnr) + " dB  (mean of 24 views)\n";
+    s += "SSIM:           " + format("%.4f", r.appearance->ssim) + "\n";
+  }
+  for (const auto& w : r.warnings) s += "warning: " + w + "\n";
+  return s;
+}
+
+}  // namespace u3d

@@ -1,0 +1,86 @@
+// The eval and perturb subcommands end to end: exit status, outputs, and clear errors on bad input.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "io/mesh_io.h"
+#include "test_shapes.h"
+
+using namespace u3d;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CliRun {
+  int status;
+  std::string output;
+};
+
+CliRun run_cli(const std::string& args, const fs::path& dir) {
+  fs::path log = dir / "cli_output.txt";
+  std::string cmd = std::string(UNIQUE3D_CLI) + " --quiet " + args + " > " + log.string() + " 2>&1";
+  int raw = std::system(cmd.c_str());
+  std::ifstream f(log);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return {WEXITSTATUS(raw), ss.str()};
+}
+
+class CliEval : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir = fs::temp_directory_path() / ("u3d_test_cli_eval_" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+  }
+  void TearDown() override { fs::remove_all(dir); }
+  fs::path dir;
+};
+
+}  // namespace
+
+TEST_F(CliEval, IdenticalMeshesWriteAPerfectJsonReport) {
+  Mesh sphere = test::sphere_mesh(0.5f, 2);
+  sphere.colors.assign(sphere.positions.size(), Vec3f(0.2f, 0.6f, 0.9f));
+  write_mesh(sphere, dir / "a.ply");
+  CliRun r = run_cli("eval " + (dir / "a.ply").string() + " " + (dir / "a.ply").string() +
+                      " --samples 2000 --iou-resolution 16 --render-resolution 32 --json " + (dir / "m.json").string(),
+                  dir);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("volume IoU:     1.0000"), std::string::npos) << r.output;
+  std::ifstream f(dir / "m.json");
+  nlohmann::json j = nlohmann::json::parse(f);
+  EXPECT_DOUBLE_EQ(j["volume_iou"]["iou"].get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(j["appearance"]["ssim"].get<double>(), 1.0);
+  EXPECT_EQ(j["volume_iou"]["resolution"].get<int>(), 16);
+  for (const auto& e : fs::directory_iterator(dir))  // no temporary left behind
+    EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
+}
+
+TEST_F(CliEval, EmptyOrMissingMeshesFailWithAMessage) {
+  std::ofstream(dir / "empty.obj") << "# no geometry\n";
+  write_mesh(test::box_mesh({0, 0, 0}, {1, 1, 1}), dir / "box.obj");
+  CliRun empty = run_cli("eval " + (dir / "empty.obj").string() + " " + (dir / "box.obj").string(), dir);
+  EXPECT_EQ(empty.status, 1) << empty.output;
+  EXPECT_NE(empty.output.find("unique3d: error:"), std::string::npos) << empty.output;
+  EXPECT_NE(empty.output.find("empty.obj"), std::string::npos) << empty.output;
+  CliRun missing = run_cli("eval " + (dir / "nope.obj").string() + " " + (dir / "box.obj").string(), dir);
+  EXPECT_NE(missing.status, 0);
+  EXPECT_NE(missing.output.find("nope.obj"), std::string::npos) << missing.output;
+}
+
+TEST_F(CliEval, PerturbRejectsBadViewSpecs) {
+  fs::create_directories(dir / "views");
+  CliRun bad_view = run_cli("perturb " + (dir / "views").string() + " -o " + (dir / "out").string() +
+                             " --rotate-view top:3", dir);
+  EXPECT_EQ(bad_view.status, 1);
+  EXPECT_NE(bad_view.output.find("unknown view 'top'"), std::string::npos) << bad_view.output;
+  CliRun bad_number = run_cli("perturb " + (dir / "views").string() + " -o " + (dir / "out").string() +
+                               " --scale-view back:big", dir);
+  EXPECT_EQ(bad_number.status, 1);
+  EXPECT_NE(bad_number.output.find("not a number"), std::string::npos) << bad_number.output;
+}
