@@ -1,5 +1,6 @@
 #include "core/mesh.h"
 
+#include <Eigen/Geometry>  // cross()
 #include <cmath>
 
 #include "core/error.h"
