@@ -1,0 +1,51 @@
+#pragma once
+// ISOMER stage 1 (official reconstruct_stage1): from an initial mesh, fit the four normal maps and
+// their masks with the differentiable normal renderer and the continuous-remeshing optimizer, shrinking
+// the edge length from start to end. Losses: normal L2 where the mesh is rendered, alpha L2 where the
+// target is background, expansion along normals (paper Fig. 5b) and an out-of-box penalty.
+#include <vector>
+
+#include "core/camera.h"
+#include "core/image.h"
+#include "core/mesh.h"
+
+namespace u3d {
+
+struct CoarseStageOptions {
+  int steps = 200;
+  float start_edge_length = 0.1f;
+  float end_edge_length = 0.02f;
+  float gain = 0.05f;             // edge-length controller gain
+  float learning_rate = 0.3f;
+  float lr_decay = 0.995f;        // learning rate multiplied by this before every step
+  float expansion_weight = 0.1f;
+  float out_of_box_limit = 0.99f;
+  float out_of_box_weight = 10.f;
+  unsigned seed = 1;
+
+  // Schedules of the official pipeline: starting from the fast initial mesh ("std"), or from a sphere.
+  static CoarseStageOptions from_initial_mesh() { return {}; }
+  static CoarseStageOptions from_sphere();
+};
+
+struct StageReport {
+  int steps = 0;
+  double seconds = 0.0;
+  double final_loss = 0.0;
+  float final_edge_length = 0.f;
+};
+
+struct StageMesh {
+  std::vector<Vec3f> positions;
+  std::vector<Vec3i> faces;
+};
+
+// The sphere initialisation: an icosphere of radius 0.5 (about 640 faces).
+StageMesh sphere_initial_mesh();
+
+// normal_maps[i]: RGBA, RGB = (n + 1) / 2 in world space, alpha = mask, same size as cameras[i].
+StageMesh run_coarse_stage(const StageMesh& initial, const std::vector<Image>& normal_maps,
+                           const std::vector<Camera>& cameras, const CoarseStageOptions& options = {},
+                           StageReport* report = nullptr);
+
+}  // namespace u3d

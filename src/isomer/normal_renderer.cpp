@@ -1,0 +1,113 @@
+#include "isomer/normal_renderer.h"
+
+#include <algorithm>
+
+#include "render/barycentric_backward.h"
+#include "render/interpolate.h"
+
+namespace u3d {
+
+namespace {
+
+constexpr int kChannels = 4;
+
+void zero_pixels(Image& image, const std::vector<int32_t>& pixels) {
+  for (int32_t p : pixels) std::fill_n(image.data.data() + size_t(p) * image.channels, image.channels, 0.f);
+}
+
+}  // namespace
+
+std::vector<float> normal_color_attributes(const std::vector<Vec3f>& unit_vectors) {
+  std::vector<float> a(unit_vectors.size() * kChannels);
+  for (size_t v = 0; v < unit_vectors.size(); ++v) {
+    for (int c = 0; c < 3; ++c) a[v * kChannels + c] = 0.5f * (unit_vectors[v][c] + 1.f);
+    a[v * kChannels + 3] = 1.f;
+  }
+  return a;
+}
+
+NormalRenderer::NormalRenderer(std::vector<Camera> cameras) {
+  views_.resize(cameras.size());
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    RenderedView& v = views_[i];
+    v.camera = cameras[i];
+    const int w = v.camera.width, h = v.camera.height;
+    v.color = Image(w, h, kChannels);
+    v.image = Image(w, h, kChannels);
+    v.grad_image = Image(w, h, kChannels);
+    v.grad_color = Image(w, h, kChannels);
+    v.grad_bary.assign(size_t(w) * h, Vec2f::Zero());
+  }
+}
+
+void NormalRenderer::render(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& faces,
+                            const std::vector<Vec3f>& vertex_normals) {
+  attributes_ = normal_color_attributes(vertex_normals);
+  neighbors_ = edge_neighbors(faces);
+#pragma omp parallel for schedule(dynamic, 1)
+  for (size_t i = 0; i < views_.size(); ++i) {
+    RenderedView& v = views_[i];
+    // Forget the previous frame's footprint.
+    zero_pixels(v.color, v.active);
+    zero_pixels(v.image, v.active);
+    zero_pixels(v.grad_image, v.active);
+    v.raster = rasterize(positions, faces, v.camera);
+    v.projection = project_to_screen(positions, v.camera);
+    v.covered = covered_pixels(v.raster);
+    interpolate(v.raster, v.covered, faces, attributes_.data(), kChannels, v.color);
+    for (int32_t p : v.covered)
+      std::copy_n(v.color.data.data() + size_t(p) * kChannels, kChannels, v.image.data.data() + size_t(p) * kChannels);
+    v.pairs = find_antialias_pairs(v.raster, faces, neighbors_, v.projection);
+    apply_antialias(v.pairs, v.color, v.image);
+    v.active = v.covered;
+    for (const AntialiasPair& pair : v.pairs) {
+      const int32_t target = pair.alpha > 0.f ? pair.pixel0 : pair.pixel1;
+      if (!v.raster.covered(target)) v.active.push_back(target);
+    }
+    std::sort(v.active.begin(), v.active.end());
+    v.active.erase(std::unique(v.active.begin(), v.active.end()), v.active.end());
+    zero_pixels(v.grad_image, v.active);
+  }
+}
+
+void NormalRenderer::render_attribute(const std::vector<Vec3i>& faces, const std::vector<Vec3f>& unit_vectors,
+                                      size_t view_index, Image& out) const {
+  const RenderedView& v = views_[view_index];
+  const std::vector<float> attributes = normal_color_attributes(unit_vectors);
+  Image color(v.raster.width, v.raster.height, kChannels);
+  interpolate(v.raster, v.covered, faces, attributes.data(), kChannels, color);
+  out = color;
+  apply_antialias(v.pairs, color, out);
+}
+
+void NormalRenderer::backward(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& faces,
+                              const VertexNormals& normals, std::vector<Vec3f>& grad_positions) {
+  const size_t n = positions.size();
+#pragma omp parallel for schedule(dynamic, 1)
+  for (size_t i = 0; i < views_.size(); ++i) {
+    RenderedView& v = views_[i];
+    // Identity part of the anti-aliasing backward, then its blend and edge parts.
+    for (int32_t p : v.covered)
+      std::copy_n(v.grad_image.data.data() + size_t(p) * kChannels, kChannels,
+                  v.grad_color.data.data() + size_t(p) * kChannels);
+    v.screen_grad.reset(n);
+    antialias_backward(v.pairs, v.color, faces, v.projection, v.grad_image, v.grad_color, v.screen_grad);
+    v.grad_attributes.assign(n * kChannels, 0.f);
+    interpolate_backward(v.raster, v.covered, faces, attributes_.data(), kChannels, v.grad_color,
+                         v.grad_attributes.data(), &v.grad_bary);
+    barycentric_backward(v.raster, v.covered, faces, v.projection, v.grad_bary, v.screen_grad);
+    v.grad_positions.assign(n, Vec3f::Zero());
+    add_world_gradient(v.projection, positions, v.screen_grad, v.grad_positions);
+  }
+  // Colour = (n + 1) / 2: the colour gradient reaches the unit normals halved.
+  std::vector<Vec3f> grad_normals(n, Vec3f::Zero());
+  for (const RenderedView& v : views_) {
+    for (size_t p = 0; p < n; ++p) {
+      grad_positions[p] += v.grad_positions[p];
+      for (int c = 0; c < 3; ++c) grad_normals[p][c] += 0.5f * v.grad_attributes[p * kChannels + c];
+    }
+  }
+  vertex_normals_backward(positions, faces, normals, grad_normals, grad_positions);
+}
+
+}  // namespace u3d

@@ -1,0 +1,70 @@
+#pragma once
+// Differentiable normal-map renderer of ISOMER (the official NormalsRenderer on the CPU): for each view,
+// rasterize, interpolate colour (n + 1) / 2 and coverage alpha, then anti-alias silhouettes. The
+// backward pass sends image-space gradients to vertex positions along all three official paths:
+// through the vertex normals, through the barycentrics, and through the silhouette edges.
+//
+// Only the object's footprint is touched: covered pixels plus the background pixels anti-aliasing
+// blends into ("active" pixels). Everywhere else the image is zero and stays zero between frames.
+#include <cstdint>
+#include <vector>
+
+#include "core/camera.h"
+#include "core/image.h"
+#include "isomer/vertex_normals_grad.h"
+#include "render/antialias.h"
+#include "render/rasterizer.h"
+#include "render/screen_projection.h"
+
+namespace u3d {
+
+struct RenderedView {
+  Camera camera;
+  RasterBuffer raster;
+  ScreenProjection projection;
+  std::vector<int32_t> covered;        // pixels a triangle covers
+  std::vector<int32_t> active;         // covered + background pixels changed by anti-aliasing
+  std::vector<AntialiasPair> pairs;    // silhouette pixel pairs
+  Image color;                         // RGBA before anti-aliasing (zero on background)
+  Image image;                         // RGBA after anti-aliasing: what the losses see
+  Image grad_image;                    // dL/d(image); losses fill it on `active` pixels
+  // Scratch for the backward pass.
+  Image grad_color;
+  std::vector<Vec2f> grad_bary;
+  std::vector<float> grad_attributes;
+  ScreenGradient screen_grad;
+  std::vector<Vec3f> grad_positions;
+};
+
+class NormalRenderer {
+ public:
+  explicit NormalRenderer(std::vector<Camera> cameras);
+
+  size_t view_count() const { return views_.size(); }
+  const RenderedView& view(size_t i) const { return views_[i]; }
+  RenderedView& view(size_t i) { return views_[i]; }
+
+  // Renders all views of the mesh with these unit vertex normals; clears each view's grad_image on its
+  // new active pixels.
+  void render(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& faces,
+              const std::vector<Vec3f>& vertex_normals);
+
+  // Renders other per-vertex unit vectors with the current views' rasters and anti-aliasing (no
+  // gradient): the refinement stage's target images. `out` gets full-size RGBA images.
+  void render_attribute(const std::vector<Vec3i>& faces, const std::vector<Vec3f>& unit_vectors, size_t view_index,
+                        Image& out) const;
+
+  // Adds dL/d(positions) for the views' grad_image (set on active pixels by the losses).
+  void backward(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& faces, const VertexNormals& normals,
+                std::vector<Vec3f>& grad_positions);
+
+ private:
+  std::vector<RenderedView> views_;
+  std::vector<float> attributes_;  // per vertex ((n + 1) / 2, 1)
+  EdgeNeighbors neighbors_;
+};
+
+// ((n + 1) / 2, 1) per vertex: the colour and coverage channels the renderer interpolates.
+std::vector<float> normal_color_attributes(const std::vector<Vec3f>& unit_vectors);
+
+}  // namespace u3d

@@ -1,0 +1,109 @@
+#include "isomer/reconstruction_losses.h"
+
+#include <cmath>
+
+#include "core/error.h"
+
+namespace u3d {
+
+NormalTarget make_normal_target(const Image& normal_map) {
+  require(normal_map.channels == 4, "normal map must be RGBA (alpha = mask)");
+  NormalTarget t;
+  t.rgba = Image(normal_map.width, normal_map.height, 4);
+  for (size_t p = 0; p < normal_map.pixel_count(); ++p) {
+    const float* in = normal_map.data.data() + p * 4;
+    float* out = t.rgba.data.data() + p * 4;
+    const float a = in[3];
+    // Faint alpha is treated as background, as the official target preparation does.
+    for (int c = 0; c < 3; ++c) out[c] = a > 0.05f ? in[c] * a : 0.f;
+    out[3] = a;
+    if (a < 0.5f) {
+      t.background.push_back(int32_t(p));
+      t.background_alpha_sq += double(a) * a;
+    }
+  }
+  return t;
+}
+
+double masked_image_l2(NormalRenderer& renderer, const std::vector<const Image*>& references, int channels,
+                       float weight) {
+  require(references.size() == renderer.view_count(), "one reference image per view");
+  size_t count = 0;
+  for (size_t i = 0; i < renderer.view_count(); ++i) {
+    const RenderedView& v = renderer.view(i);
+    for (int32_t p : v.active) count += v.image.data[size_t(p) * 4 + 3] > 0.5f;
+  }
+  if (count == 0) return 0.0;
+  const float scale = weight / float(count * channels);
+  double total = 0.0;
+  for (size_t i = 0; i < renderer.view_count(); ++i) {
+    RenderedView& v = renderer.view(i);
+    const Image& ref = *references[i];
+    require(ref.width == v.image.width && ref.height == v.image.height && ref.channels == 4,
+            "reference image must match the view resolution and be RGBA");
+    for (int32_t p : v.active) {
+      const float* img = v.image.data.data() + size_t(p) * 4;
+      if (img[3] <= 0.5f) continue;
+      const float* r = ref.data.data() + size_t(p) * 4;
+      float* g = v.grad_image.data.data() + size_t(p) * 4;
+      for (int c = 0; c < channels; ++c) {
+        const float d = img[c] - r[c];
+        total += double(d) * d;
+        g[c] += 2.f * scale * d;
+      }
+    }
+  }
+  return total * scale;
+}
+
+double background_alpha_l2(NormalRenderer& renderer, const std::vector<NormalTarget>& targets, float weight) {
+  require(targets.size() == renderer.view_count(), "one target per view");
+  size_t count = 0;
+  for (const NormalTarget& t : targets) count += t.background.size();
+  if (count == 0) return 0.0;
+  const float scale = weight / float(count);
+  double total = 0.0;
+  for (size_t i = 0; i < renderer.view_count(); ++i) {
+    RenderedView& v = renderer.view(i);
+    const NormalTarget& t = targets[i];
+    // Off the rendered footprint the alpha is 0: those pixels add the constant target alpha^2.
+    total += t.background_alpha_sq;
+    for (int32_t p : v.active) {
+      const float target_alpha = t.rgba.data[size_t(p) * 4 + 3];
+      if (target_alpha >= 0.5f) continue;
+      const float d = v.image.data[size_t(p) * 4 + 3] - target_alpha;
+      total += double(d) * d - double(target_alpha) * target_alpha;
+      v.grad_image.data[size_t(p) * 4 + 3] += 2.f * scale * d;
+    }
+  }
+  return total * scale;
+}
+
+double expansion_loss(const std::vector<Vec3f>& normals, float weight, std::vector<Vec3f>& grad_positions) {
+  if (normals.empty()) return 0.0;
+  const float scale = weight / float(3 * normals.size());
+  double total = 0.0;
+  for (size_t v = 0; v < normals.size(); ++v) {
+    total += 0.5 * normals[v].squaredNorm();
+    grad_positions[v] -= scale * normals[v];
+  }
+  return total * scale;
+}
+
+double out_of_box_loss(const std::vector<Vec3f>& positions, float limit, float weight,
+                       std::vector<Vec3f>& grad_positions) {
+  if (positions.empty()) return 0.0;
+  const float scale = weight / float(3 * positions.size());
+  double total = 0.0;
+  for (size_t v = 0; v < positions.size(); ++v) {
+    for (int c = 0; c < 3; ++c) {
+      const float excess = std::abs(positions[v][c]) - limit;
+      if (excess <= 0.f) continue;
+      total += double(excess) * excess;
+      grad_positions[v][c] += 2.f * scale * excess * (positions[v][c] > 0.f ? 1.f : -1.f);
+    }
+  }
+  return total * scale;
+}
+
+}  // namespace u3d

@@ -1,0 +1,31 @@
+#pragma once
+// Edge-based connectivity of a triangle mesh, rebuilt from the face list after each batch of edits:
+// unique edges, the faces on both sides of each edge, the edge of each face side, and vertex rings.
+#include <array>
+#include <vector>
+
+#include "core/mesh.h"
+
+namespace u3d {
+
+struct EdgeTopology {
+  static constexpr int kNone = -1;
+
+  std::vector<std::array<int, 2>> edge_vertices;  // per edge, lower vertex index first
+  // Per edge: the face traversing it lower -> higher ("left") and higher -> lower ("right"), each as
+  // face * 3 + side (side i = from corner i to corner i + 1); kNone on a border.
+  std::vector<std::array<int, 2>> edge_sides;
+  std::vector<char> edge_manifold;  // 0 when more than two sides (or two in the same direction) share it
+  std::vector<Vec3i> face_edges;    // per face: edge of side i
+  std::vector<int> ring_offsets;    // CSR of vertex neighbours: ring of v = ring[ring_offsets[v] .. [v+1])
+  std::vector<int> ring;
+
+  size_t edge_count() const { return edge_vertices.size(); }
+  int degree(int v) const { return ring_offsets[v + 1] - ring_offsets[v]; }
+  bool interior(int e) const { return edge_manifold[e] && edge_sides[e][0] >= 0 && edge_sides[e][1] >= 0; }
+  bool adjacent(int a, int b) const;
+};
+
+EdgeTopology build_edge_topology(const std::vector<Vec3i>& faces, size_t vertex_count);
+
+}  // namespace u3d

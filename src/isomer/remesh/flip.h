@@ -1,0 +1,15 @@
+#pragma once
+// Edge flip of continuous remeshing: an interior edge is flipped when that brings the valences of its
+// four vertices closer to 6 and both new faces keep the orientation of the old pair. Flips are chosen
+// greedily by gain with disjoint vertex sets.
+#include <vector>
+
+#include "core/mesh.h"
+#include "isomer/remesh/vertex_rows.h"
+
+namespace u3d {
+
+// Flips in place; returns the number of flipped edges.
+int flip_edges_for_valence(const VertexRows& rows, std::vector<Vec3i>& faces);
+
+}  // namespace u3d

@@ -1,0 +1,169 @@
+#include "render/antialias.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+namespace u3d {
+
+EdgeNeighbors edge_neighbors(const std::vector<Vec3i>& faces) {
+  // Directed edge (a -> b) of every face with the face's third vertex, sorted for lookup.
+  struct Directed {
+    uint64_t key;
+    int32_t third;
+  };
+  auto key = [](int a, int b) { return (uint64_t(uint32_t(a)) << 32) | uint32_t(b); };
+  std::vector<Directed> directed;
+  directed.reserve(faces.size() * 3);
+  for (const Vec3i& f : faces)
+    for (int i = 0; i < 3; ++i) directed.push_back({key(f[(i + 1) % 3], f[(i + 2) % 3]), f[i]});
+  std::sort(directed.begin(), directed.end(), [](const Directed& a, const Directed& b) { return a.key < b.key; });
+  EdgeNeighbors n;
+  n.opposite.resize(faces.size());
+  for (size_t fi = 0; fi < faces.size(); ++fi) {
+    const Vec3i& f = faces[fi];
+    for (int i = 0; i < 3; ++i) {
+      // The neighbour traverses this edge the other way round.
+      const uint64_t k = key(f[(i + 2) % 3], f[(i + 1) % 3]);
+      auto it = std::lower_bound(directed.begin(), directed.end(), k,
+                                 [](const Directed& d, uint64_t k) { return d.key < k; });
+      n.opposite[fi][i] = (it != directed.end() && it->key == k) ? it->third : -1;
+    }
+  }
+  return n;
+}
+
+namespace {
+
+inline bool same_sign(float a, float b) { return std::signbit(a) == std::signbit(b); }
+inline float cross2(float ax, float ay, float bx, float by) { return ax * by - ay * bx; }
+
+// Analyses one pair of neighbouring pixels; returns false when nothing is blended.
+bool analyse_pair(const RasterBuffer& raster, const std::vector<Vec3i>& faces, const EdgeNeighbors& neighbors,
+                  const ScreenProjection& proj, int32_t p0, int32_t p1, bool down, AntialiasPair& out) {
+  const int32_t t0 = raster.face_id[p0], t1 = raster.face_id[p1];
+  // The nearer triangle owns the edge (the far one is occluded there, or background).
+  int32_t tri = t0 >= 0 ? t0 : t1;
+  if (t0 >= 0 && t1 >= 0) tri = raster.depth[p0] < raster.depth[p1] ? t0 : t1;
+  const bool from1 = tri != t0;
+  const int32_t origin = from1 ? p1 : p0;
+  const float fx = float(origin % raster.width) + 0.5f, fy = float(origin / raster.width) + 0.5f;
+  const Vec3i& f = faces[tri];
+  const Vec3i& o = neighbors.opposite[tri];
+  float x[3], y[3], ox[3], oy[3];
+  for (int i = 0; i < 3; ++i) {
+    x[i] = proj.pixel[f[i]].x() - fx;
+    y[i] = proj.pixel[f[i]].y() - fy;
+    const int ov = o[i] >= 0 ? o[i] : f[i];  // a border edge behaves like a silhouette
+    ox[i] = proj.pixel[ov].x() - fx;
+    oy[i] = proj.pixel[ov].y() - fy;
+  }
+  // An edge is a silhouette when the neighbouring face folds back onto the same side of it, i.e. the
+  // "wing" triangle (opposite vertex, edge) has the same screen orientation as the triangle.
+  const float bb = cross2(x[1] - x[0], y[1] - y[0], x[2] - x[0], y[2] - y[0]);
+  bool silhouette[3];
+  for (int i = 0; i < 3; ++i) {
+    const int j = (i + 1) % 3, k = (i + 2) % 3;
+    silhouette[i] = same_sign(cross2(x[j] - ox[i], y[j] - oy[i], x[k] - ox[i], y[k] - oy[i]), bb);
+  }
+  if (!silhouette[0] && !silhouette[1] && !silhouette[2]) return false;
+  if (down)
+    for (int i = 0; i < 3; ++i) std::swap(x[i], y[i]);
+  // Now the neighbour lies along +x (or -x when the triangle is in pixel1): find where the edges
+  // cross the x axis and keep the crossing farthest toward the neighbour.
+  const float ds = from1 ? -1.f : 1.f;
+  int best = -1;
+  float best_c = -std::numeric_limits<float>::infinity();
+  for (int i = 0; i < 3; ++i) {
+    const int j = (i + 1) % 3, k = (i + 2) % 3;
+    if (same_sign(y[j], y[k])) continue;
+    const float dy = y[k] - y[j];
+    if (dy == 0.f) continue;
+    const float c = ds * (x[j] * dy - y[j] * (x[k] - x[j])) / dy;
+    if (c > best_c) best_c = c, best = i;
+  }
+  if (best < 0 || !silhouette[best]) return false;
+  {
+    const int j = (best + 1) % 3, k = (best + 2) % 3;
+    // Edges closer to horizontal are handled by the perpendicular pixel pairs.
+    if (std::abs(y[k] - y[j]) < std::abs(x[k] - x[j])) return false;
+  }
+  constexpr float kEps = 0.0625f;  // tolerate 1/16 pixel of inaccuracy in the raster
+  if (!(best_c > -kEps && best_c < 1.f + kEps)) return false;
+  const float dc = std::clamp(best_c, 0.f, 1.f);
+  out = {p0, p1, tri, int8_t(best), down, from1, ds * (0.5f - dc)};
+  return out.alpha != 0.f;
+}
+
+}  // namespace
+
+std::vector<AntialiasPair> find_antialias_pairs(const RasterBuffer& raster, const std::vector<Vec3i>& faces,
+                                                const EdgeNeighbors& neighbors, const ScreenProjection& projection) {
+  std::vector<AntialiasPair> pairs;
+  const int w = raster.width, h = raster.height;
+  AntialiasPair pair;
+  for (int y = 0; y < h; ++y) {
+    const int32_t* row = raster.face_id.data() + size_t(y) * w;
+    const int32_t* below = y + 1 < h ? row + w : nullptr;
+    for (int x = 0; x < w; ++x) {
+      const int32_t p = y * w + x;
+      if (x + 1 < w && row[x] != row[x + 1] && analyse_pair(raster, faces, neighbors, projection, p, p + 1, false, pair))
+        pairs.push_back(pair);
+      if (below && row[x] != below[x] && analyse_pair(raster, faces, neighbors, projection, p, p + w, true, pair))
+        pairs.push_back(pair);
+    }
+  }
+  return pairs;
+}
+
+void apply_antialias(const std::vector<AntialiasPair>& pairs, const Image& color, Image& out) {
+  const int ch = color.channels;
+  for (const AntialiasPair& a : pairs) {
+    const float* c0 = color.data.data() + size_t(a.pixel0) * ch;
+    const float* c1 = color.data.data() + size_t(a.pixel1) * ch;
+    float* o = out.data.data() + size_t(a.alpha > 0.f ? a.pixel0 : a.pixel1) * ch;
+    for (int c = 0; c < ch; ++c) o[c] += a.alpha * (c1[c] - c0[c]);
+  }
+}
+
+void antialias_backward(const std::vector<AntialiasPair>& pairs, const Image& color, const std::vector<Vec3i>& faces,
+                        const ScreenProjection& projection, const Image& grad_out, Image& grad_color,
+                        ScreenGradient& screen) {
+  const int ch = color.channels;
+  const int width = int(projection.width);
+  for (const AntialiasPair& a : pairs) {
+    const float* c0 = color.data.data() + size_t(a.pixel0) * ch;
+    const float* c1 = color.data.data() + size_t(a.pixel1) * ch;
+    const float* g = grad_out.data.data() + size_t(a.alpha > 0.f ? a.pixel0 : a.pixel1) * ch;
+    float* g0 = grad_color.data.data() + size_t(a.pixel0) * ch;
+    float* g1 = grad_color.data.data() + size_t(a.pixel1) * ch;
+    float dd = 0.f;  // dL/d(alpha)
+    for (int c = 0; c < ch; ++c) {
+      dd += g[c] * (c1[c] - c0[c]);
+      g0[c] -= a.alpha * g[c];
+      g1[c] += a.alpha * g[c];
+    }
+    // A clamped crossing (|alpha| = 1/2) does not move with the edge.
+    if (dd == 0.f || std::abs(a.alpha) >= 0.5f) continue;
+    const Vec3i& f = faces[a.face];
+    const int v1 = f[(a.edge + 1) % 3], v2 = f[(a.edge + 2) % 3];
+    const int32_t origin = a.from_pixel1 ? a.pixel1 : a.pixel0;
+    const float fx = float(origin % width) + 0.5f, fy = float(origin / width) + 0.5f;
+    float x1 = projection.pixel[v1].x() - fx, y1 = projection.pixel[v1].y() - fy;
+    float x2 = projection.pixel[v2].x() - fx, y2 = projection.pixel[v2].y() - fy;
+    if (a.down) std::swap(x1, y1), std::swap(x2, y2);
+    const float d = y2 - y1;
+    if (std::abs(d) < 1e-6f) continue;
+    // alpha = ds/2 - x_cross with x_cross = (x1 y2 - x2 y1) / (y2 - y1), the edge's x-axis crossing.
+    const float xc = (x1 * y2 - x2 * y1) / d;
+    const float gx = -dd;  // dL/d(x_cross)
+    Vec2f g1v(gx * y2 / d, gx * (xc - x2) / d);
+    Vec2f g2v(-gx * y1 / d, gx * (x1 - xc) / d);
+    if (a.down) std::swap(g1v.x(), g1v.y()), std::swap(g2v.x(), g2v.y());
+    screen.pixel[v1] += g1v;
+    screen.pixel[v2] += g2v;
+  }
+}
+
+}  // namespace u3d

@@ -1,0 +1,54 @@
+#include "render/barycentric_backward.h"
+
+#include <cmath>
+
+namespace u3d {
+
+namespace {
+// d cross(u, v) / du and / dv, with cross(u, v) = u.x v.y - u.y v.x.
+inline Vec2f dcross_du(const Vec2f& v) { return {v.y(), -v.x()}; }
+inline Vec2f dcross_dv(const Vec2f& u) { return {-u.y(), u.x()}; }
+inline float cross2(const Vec2f& u, const Vec2f& v) { return u.x() * v.y() - u.y() * v.x(); }
+}  // namespace
+
+void barycentric_backward(const RasterBuffer& raster, std::span<const int32_t> pixels, const std::vector<Vec3i>& faces,
+                          const ScreenProjection& projection, const std::vector<Vec2f>& grad_bary,
+                          ScreenGradient& screen) {
+  for (int32_t p : pixels) {
+    const Vec2f& g = grad_bary[p];
+    if (g.x() == 0.f && g.y() == 0.f) continue;
+    const Vec3i& f = faces[raster.face_id[p]];
+    const Vec2f q(float(p % raster.width) + 0.5f, float(p / raster.width) + 0.5f);
+    const Vec2f r[3] = {projection.pixel[f[0]] - q, projection.pixel[f[1]] - q, projection.pixel[f[2]] - q};
+    const float w[3] = {projection.w[f[0]], projection.w[f[1]], projection.w[f[2]]};
+    // Screen-space barycentrics s_i = E_i / A from the edge functions.
+    const float e[3] = {cross2(r[1], r[2]), cross2(r[2], r[0]), cross2(r[0], r[1])};
+    const float area = e[0] + e[1] + e[2];
+    if (std::abs(area) < 1e-12f) continue;
+    float s[3], t[3];
+    for (int i = 0; i < 3; ++i) s[i] = e[i] / area;
+    // Perspective correction b_i = (s_i / w_i) / sum_j (s_j / w_j).
+    float tsum = 0.f;
+    for (int i = 0; i < 3; ++i) tsum += (t[i] = s[i] / w[i]);
+    const float b[3] = {t[0] / tsum, t[1] / tsum, t[2] / tsum};
+    const float gb[3] = {0.f, g.x(), g.y()};  // b0 is dependent: only b1, b2 are outputs
+    const float gdotb = gb[1] * b[1] + gb[2] * b[2];
+    float gs[3];
+    for (int i = 0; i < 3; ++i) {
+      const float gt = (gb[i] - gdotb) / tsum;
+      gs[i] = gt / w[i];
+      screen.w[f[i]] += -gt * t[i] / w[i];
+    }
+    // s_i = E_i / A with A = sum E_i.
+    float garea = 0.f;
+    for (int i = 0; i < 3; ++i) garea -= gs[i] * s[i] / area;
+    float ge[3];
+    for (int i = 0; i < 3; ++i) ge[i] = gs[i] / area + garea;
+    // E0 = cross(r1, r2), E1 = cross(r2, r0), E2 = cross(r0, r1).
+    screen.pixel[f[1]] += ge[0] * dcross_du(r[2]) + ge[2] * dcross_dv(r[0]);
+    screen.pixel[f[2]] += ge[0] * dcross_dv(r[1]) + ge[1] * dcross_du(r[0]);
+    screen.pixel[f[0]] += ge[1] * dcross_dv(r[2]) + ge[2] * dcross_du(r[1]);
+  }
+}
+
+}  // namespace u3d

@@ -1,0 +1,52 @@
+#include "render/interpolate.h"
+
+namespace u3d {
+
+std::vector<int32_t> covered_pixels(const RasterBuffer& raster) {
+  std::vector<int32_t> pixels;
+  const size_t n = raster.pixel_count();
+  for (size_t p = 0; p < n; ++p)
+    if (raster.face_id[p] >= 0) pixels.push_back(int32_t(p));
+  return pixels;
+}
+
+void interpolate(const RasterBuffer& raster, std::span<const int32_t> pixels, const std::vector<Vec3i>& faces,
+                 const float* attributes, int channels, Image& out) {
+  for (int32_t p : pixels) {
+    const Vec3i& f = faces[raster.face_id[p]];
+    const float b1 = raster.bary[p].x(), b2 = raster.bary[p].y(), b0 = 1.f - b1 - b2;
+    const float* a0 = attributes + size_t(f[0]) * channels;
+    const float* a1 = attributes + size_t(f[1]) * channels;
+    const float* a2 = attributes + size_t(f[2]) * channels;
+    float* o = out.data.data() + size_t(p) * channels;
+    for (int c = 0; c < channels; ++c) o[c] = b0 * a0[c] + b1 * a1[c] + b2 * a2[c];
+  }
+}
+
+void interpolate_backward(const RasterBuffer& raster, std::span<const int32_t> pixels, const std::vector<Vec3i>& faces,
+                          const float* attributes, int channels, const Image& grad_out, float* grad_attributes,
+                          std::vector<Vec2f>* grad_bary) {
+  for (int32_t p : pixels) {
+    const Vec3i& f = faces[raster.face_id[p]];
+    const float b1 = raster.bary[p].x(), b2 = raster.bary[p].y(), b0 = 1.f - b1 - b2;
+    const float* g = grad_out.data.data() + size_t(p) * channels;
+    const float* a0 = attributes + size_t(f[0]) * channels;
+    const float* a1 = attributes + size_t(f[1]) * channels;
+    const float* a2 = attributes + size_t(f[2]) * channels;
+    float* g0 = grad_attributes + size_t(f[0]) * channels;
+    float* g1 = grad_attributes + size_t(f[1]) * channels;
+    float* g2 = grad_attributes + size_t(f[2]) * channels;
+    float db1 = 0.f, db2 = 0.f;
+    for (int c = 0; c < channels; ++c) {
+      g0[c] += b0 * g[c];
+      g1[c] += b1 * g[c];
+      g2[c] += b2 * g[c];
+      // b0 = 1 - b1 - b2, so each of b1, b2 also moves the weight of vertex 0.
+      db1 += g[c] * (a1[c] - a0[c]);
+      db2 += g[c] * (a2[c] - a0[c]);
+    }
+    if (grad_bary) (*grad_bary)[p] = {db1, db2};
+  }
+}
+
+}  // namespace u3d
