@@ -1,0 +1,220 @@
+// torch.save zip checkpoints: the golden unet_mv weights written by real torch.save, and small
+// archives written here (caffe2's zip writer + a hand-assembled pickle) for the corner cases.
+#include <caffe2/serialize/inline_container.h>
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <string>
+#include <unistd.h>
+
+#include "core/error.h"
+#include "nn/pth_reader.h"
+#include "nn/safetensors.h"
+#include "nn/weights_file.h"
+
+namespace fs = std::filesystem;
+using namespace u3d::nn;
+
+namespace {
+
+const fs::path kUnetMv = fs::path(UNIQUE3D_TEST_DATA) / "nn" / "unet_mv";
+
+// Assembles pickle bytes the way torch.save lays out a state dict (protocol 2).
+class PickleWriter {
+ public:
+  PickleWriter() { bytes_ += "\x80\x02"; }
+  PickleWriter& op(char c) { bytes_ += c; return *this; }
+  PickleWriter& mark() { return op('('); }
+  PickleWriter& global(const std::string& module, const std::string& name) {
+    bytes_ += 'c' + module + '\n' + name + '\n';
+    return *this;
+  }
+  PickleWriter& str(const std::string& s) {
+    op('X');
+    le32(uint32_t(s.size()));
+    bytes_ += s;
+    return *this;
+  }
+  PickleWriter& integer(int64_t v) {
+    op('J');  // BININT
+    le32(uint32_t(int32_t(v)));
+    return *this;
+  }
+  PickleWriter& int_tuple(const std::vector<int64_t>& values) {
+    mark();
+    for (int64_t v : values) integer(v);
+    return op('t');
+  }
+  PickleWriter& empty_ordered_dict() { return global("collections", "OrderedDict").op(')').op('R'); }
+  // _rebuild_tensor_v2(('storage', torch.<type>, key, 'cpu', numel), offset, size, stride, False, OrderedDict())
+  PickleWriter& tensor(const std::string& storage_type, const std::string& key, int64_t numel, int64_t offset,
+                       const std::vector<int64_t>& sizes, const std::vector<int64_t>& strides) {
+    global("torch._utils", "_rebuild_tensor_v2").mark();
+    mark().str("storage").global("torch", storage_type).str(key).str("cpu").integer(numel).op('t').op('Q');
+    integer(offset).int_tuple(sizes).int_tuple(strides).op('\x89').empty_ordered_dict();
+    return op('t').op('R');
+  }
+  std::string finish() { return bytes_ + "."; }
+
+ private:
+  void le32(uint32_t v) {
+    for (int i = 0; i < 4; ++i) bytes_ += char((v >> (8 * i)) & 0xff);
+  }
+  std::string bytes_;
+};
+
+class PthTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("u3d_pth_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  // Writes an archive "<name>.pth" holding data.pkl and the given storage records data/<key>.
+  fs::path write_pth(const std::string& name, const std::string& pickle,
+                     const std::map<std::string, std::string>& records) {
+    const fs::path path = dir_ / (name + ".pth");
+    caffe2::serialize::PyTorchStreamWriter writer(path.string());
+    writer.writeRecord("data.pkl", pickle.data(), pickle.size());
+    for (const auto& [key, bytes] : records) writer.writeRecord("data/" + key, bytes.data(), bytes.size());
+    writer.writeEndOfFile();
+    return path;
+  }
+
+  static std::string raw_bytes(const torch::Tensor& t) {
+    const torch::Tensor c = t.contiguous();
+    return std::string(static_cast<const char*>(c.data_ptr()), c.nbytes());
+  }
+
+  static void expect_error(const fs::path& path, std::initializer_list<std::string> fragments) {
+    try {
+      load_pth(path);
+      ADD_FAILURE() << "no error for " << path;
+    } catch (const u3d::Error& e) {
+      const std::string msg = e.what();
+      for (const auto& f : fragments) EXPECT_NE(msg.find(f), std::string::npos) << "'" << f << "' not in: " << msg;
+    }
+  }
+
+  fs::path dir_;
+};
+
+}  // namespace
+
+// The acceptance check: the same state dict saved by torch.save and as safetensors loads identically.
+TEST_F(PthTest, GoldenPthEqualsSafetensors) {
+  const TensorMap from_pth = load_pth(kUnetMv / "weights.pth");
+  const TensorMap from_st = load_safetensors(kUnetMv / "weights.safetensors");
+  ASSERT_EQ(from_pth.size(), from_st.size());
+  ASSERT_GT(from_pth.size(), 100u);
+  for (const auto& [name, expected] : from_st) {
+    auto it = from_pth.find(name);
+    ASSERT_NE(it, from_pth.end()) << name;
+    EXPECT_EQ(it->second.scalar_type(), expected.scalar_type()) << name;
+    EXPECT_EQ(it->second.sizes(), expected.sizes()) << name;
+    EXPECT_TRUE(torch::equal(it->second, expected)) << name;
+  }
+  // Format detection by content, whatever the extension.
+  EXPECT_EQ(load_weights(kUnetMv / "weights.pth").size(), from_st.size());
+  EXPECT_EQ(load_weights(kUnetMv / "weights.safetensors").size(), from_st.size());
+}
+
+TEST_F(PthTest, DtypesOffsetsStridesAndSharedStorage) {
+  const torch::Tensor base = torch::arange(24, torch::kFloat32);
+  const torch::Tensor bf16 = torch::linspace(-3, 3, 6).to(torch::kBFloat16);
+  const torch::Tensor f16 = torch::linspace(-1, 1, 5).to(torch::kFloat16);
+  const torch::Tensor i64 = torch::tensor({int64_t(1) << 40, int64_t(-7)});
+  const torch::Tensor flags = torch::tensor({true, false, true});
+  PickleWriter p;
+  p.empty_ordered_dict().mark();
+  p.str("matrix").tensor("FloatStorage", "0", 24, 0, {4, 6}, {6, 1});
+  p.str("transposed").tensor("FloatStorage", "0", 24, 0, {6, 4}, {1, 6});  // same storage, non-contiguous view
+  p.str("slice").tensor("FloatStorage", "0", 24, 7, {2, 3}, {6, 2});       // offset + strided
+  p.str("bf16").tensor("BFloat16Storage", "1", 6, 0, {2, 3}, {3, 1});
+  p.str("f16").tensor("HalfStorage", "2", 5, 0, {5}, {1});
+  p.str("i64").tensor("LongStorage", "3", 2, 0, {2}, {1});
+  p.str("flags").tensor("BoolStorage", "4", 3, 0, {3}, {1});
+  p.str("scalar").tensor("FloatStorage", "0", 24, 5, {}, {});
+  p.str("param").global("torch._utils", "_rebuild_parameter").mark();
+  p.tensor("FloatStorage", "0", 24, 0, {24}, {1}).op('\x88').empty_ordered_dict().op('t').op('R');
+  p.op('u').op('}').op('b');  // SETITEMS, then BUILD with an (ignored) state, as torch writes _metadata
+  const fs::path path = write_pth("mixed", p.finish(),
+                                  {{"0", raw_bytes(base)}, {"1", raw_bytes(bf16)}, {"2", raw_bytes(f16)},
+                                   {"3", raw_bytes(i64)}, {"4", raw_bytes(flags)}});
+  const TensorMap m = load_pth(path);
+  ASSERT_EQ(m.size(), 9u);
+  EXPECT_TRUE(torch::equal(m.at("matrix"), base.view({4, 6})));
+  EXPECT_TRUE(torch::equal(m.at("transposed"), base.view({4, 6}).t()));
+  EXPECT_FALSE(m.at("transposed").is_contiguous());
+  EXPECT_TRUE(torch::equal(m.at("slice"), base.view({4, 6}).slice(0, 1, 3).slice(1, 1, 6, 2)));
+  EXPECT_TRUE(m.at("matrix").is_alias_of(m.at("transposed")));  // one storage, read once
+  EXPECT_TRUE(torch::equal(m.at("bf16"), bf16.view({2, 3})));
+  EXPECT_EQ(m.at("bf16").scalar_type(), torch::kBFloat16);
+  EXPECT_TRUE(torch::equal(m.at("f16"), f16));
+  EXPECT_TRUE(torch::equal(m.at("i64"), i64));
+  EXPECT_TRUE(torch::equal(m.at("flags"), flags));
+  EXPECT_EQ(m.at("scalar").dim(), 0);
+  EXPECT_EQ(m.at("scalar").item<float>(), 5.0f);
+  EXPECT_TRUE(torch::equal(m.at("param"), base));
+}
+
+TEST_F(PthTest, RefusesGlobalsOutsideTheWhitelist) {
+  for (const auto& [module, name] : std::vector<std::pair<std::string, std::string>>{
+           {"os", "system"}, {"torch.storage", "_load_from_bytes"}, {"builtins", "eval"}}) {
+    PickleWriter p;
+    p.global(module, name).mark().str("echo hi").op('t').op('R');
+    expect_error(write_pth("evil", p.finish(), {}), {"evil.pth", module + "." + name, "refuses"});
+  }
+}
+
+TEST_F(PthTest, TruncatedArchiveNamesTheFile) {
+  std::ifstream in(kUnetMv / "weights.pth", std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  const fs::path path = dir_ / "truncated.pth";
+  std::ofstream(path, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size() / 2));
+  expect_error(path, {"truncated.pth", "corrupt or truncated"});
+}
+
+TEST_F(PthTest, CorruptPickleIsAnError) {
+  PickleWriter p;
+  p.empty_ordered_dict().mark().str("w").op('\xff');
+  expect_error(write_pth("badop", p.finish(), {}), {"badop.pth", "opcode 0xff"});
+
+  PickleWriter q;
+  q.empty_ordered_dict().mark().str("w").op('X');  // BINUNICODE cut short
+  std::string truncated = q.finish();
+  truncated.pop_back();
+  expect_error(write_pth("cut", truncated, {}), {"cut.pth", "truncated"});
+}
+
+TEST_F(PthTest, StorageProblemsNameTheTensor) {
+  PickleWriter small;
+  small.empty_ordered_dict().mark().str("conv.weight").tensor("FloatStorage", "0", 16, 0, {16}, {1}).op('u');
+  expect_error(write_pth("short", small.finish(), {{"0", std::string(32, '\0')}}),
+               {"short.pth", "conv.weight", "32 bytes"});
+
+  PickleWriter outside;
+  outside.empty_ordered_dict().mark().str("conv.bias").tensor("FloatStorage", "0", 4, 2, {4}, {1}).op('u');
+  expect_error(write_pth("outside", outside.finish(), {{"0", std::string(16, '\0')}}),
+               {"outside.pth", "conv.bias", "past its storage"});
+
+  PickleWriter absent;
+  absent.empty_ordered_dict().mark().str("lost").tensor("FloatStorage", "9", 1, 0, {1}, {1}).op('u');
+  expect_error(write_pth("absent", absent.finish(), {}), {"absent.pth", "lost", "data/9"});
+
+  PickleWriter not_tensor;
+  not_tensor.empty_ordered_dict().mark().str("epoch").integer(3).op('u');
+  expect_error(write_pth("epoch", not_tensor.finish(), {}), {"epoch.pth", "'epoch'", "not a tensor"});
+}
+
+TEST_F(PthTest, LegacyAndForeignFiles) {
+  const fs::path legacy = dir_ / "legacy.pth";
+  std::ofstream(legacy, std::ios::binary) << "\x80\x02\x8a\x0a" << std::string(20, '\0');
+  expect_error(legacy, {"legacy.pth", "legacy"});
+  const fs::path text = dir_ / "notes.pth";
+  std::ofstream(text) << "hello world";
+  expect_error(text, {"notes.pth", "not a PyTorch zip checkpoint"});
+  expect_error(dir_ / "missing.pth", {"missing.pth"});
+}
