@@ -4,7 +4,6 @@
 
 #include <fstream>
 #include <map>
-#include <sstream>
 
 #include "core/error.h"
 #include "nn/pickle_reader.h"
@@ -129,7 +128,7 @@ void check_zip_magic(const std::filesystem::path& path) {
   char magic[4] = {};
   in.read(magic, 4);
   require(in.gcount() == 4, path.string() + ": file too short to be a PyTorch checkpoint");
-  if (uint8_t(magic[0]) == 0x80 || (magic[0] == '\x8a' && magic[1] == '\x0a')) {
+  if (uint8_t(magic[0]) == 0x80) {  // the old format starts with a bare pickle (PROTO)
     throw Error(path.string() + ": legacy (pre-1.6, non-zip) torch.save format is not supported; re-save it "
                                 "with a recent torch or convert it to .safetensors");
   }
