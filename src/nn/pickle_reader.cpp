@@ -1,7 +1,6 @@
 #include "nn/pickle_reader.h"
 
 #include <bit>
-#include <cstring>
 #include <sstream>
 #include <unordered_map>
 

@@ -4,10 +4,10 @@
 
 #include <fstream>
 #include <map>
-#include <sstream>
 
 #include "core/error.h"
 #include "nn/pickle_reader.h"
+#include "nn/zip_crc.h"
 
 namespace u3d::nn {
 namespace {
@@ -128,7 +128,7 @@ void check_zip_magic(const std::filesystem::path& path) {
   char magic[4] = {};
   in.read(magic, 4);
   require(in.gcount() == 4, path.string() + ": file too short to be a PyTorch checkpoint");
-  if (uint8_t(magic[0]) == 0x80 || (magic[0] == '\x8a' && magic[1] == '\x0a')) {
+  if (uint8_t(magic[0]) == 0x80) {  // the old format starts with a bare pickle (PROTO)
     throw Error(path.string() + ": legacy (pre-1.6, non-zip) torch.save format is not supported; re-save it "
                                 "with a recent torch or convert it to .safetensors");
   }
@@ -136,18 +136,41 @@ void check_zip_magic(const std::filesystem::path& path) {
           path.string() + ": not a PyTorch zip checkpoint (no zip header)");
 }
 
+// Reads records and checks each against the CRC-32 in the zip directory (libtorch does not).
+class RecordReader {
+ public:
+  explicit RecordReader(const std::filesystem::path& path)
+      : source_(path.string()), reader_(source_), crcs_(zip_record_crcs(path)) {}
+
+  bool has(const std::string& name) { return reader_.hasRecord(name); }
+
+  // `user` says what needs the record, for errors ("tensor 'conv.weight'").
+  std::tuple<at::DataPtr, size_t> read(const std::string& name, const std::string& user) {
+    auto [data, size] = reader_.getRecord(name);
+    auto crc = crcs_.find(name);
+    require(crc != crcs_.end(), source_ + ": record " + name + " is not in the zip directory");
+    require(crc32_of(data.get(), size) == crc->second,
+            source_ + ": " + user + ": record " + name + " fails its CRC check (the file is corrupt)");
+    return {std::move(data), size};
+  }
+
+ private:
+  std::string source_;
+  caffe2::serialize::PyTorchStreamReader reader_;
+  std::map<std::string, uint32_t> crcs_;
+};
+
 // Reads each storage record once, so tensors sharing a storage share it here too.
 class StorageCache {
  public:
-  StorageCache(caffe2::serialize::PyTorchStreamReader& reader, std::string source)
-      : reader_(reader), source_(std::move(source)) {}
+  StorageCache(RecordReader& reader, std::string source) : reader_(reader), source_(std::move(source)) {}
 
   c10::Storage get(const StorageRef& ref, const std::string& tensor_name) {
     auto it = cache_.find(ref.key);
     if (it != cache_.end()) return it->second;
     const std::string record = "data/" + ref.key;
-    require(reader_.hasRecord(record), source_ + ": tensor '" + tensor_name + "': missing record " + record);
-    auto [data, nbytes] = reader_.getRecord(record);
+    require(reader_.has(record), source_ + ": tensor '" + tensor_name + "': missing record " + record);
+    auto [data, nbytes] = reader_.read(record, "tensor '" + tensor_name + "'");
     const size_t expected = size_t(ref.numel) * c10::elementSize(ref.dtype);
     require(nbytes == expected, source_ + ": tensor '" + tensor_name + "': record " + record + " holds " +
                                     std::to_string(nbytes) + " bytes, its storage needs " + std::to_string(expected));
@@ -157,7 +180,7 @@ class StorageCache {
   }
 
  private:
-  caffe2::serialize::PyTorchStreamReader& reader_;
+  RecordReader& reader_;
   std::string source_;
   std::map<std::string, c10::Storage> cache_;
 };
@@ -186,14 +209,14 @@ TensorMap load_pth(const std::filesystem::path& path) {
   check_zip_magic(path);
   const std::string source = path.string();
   try {
-    caffe2::serialize::PyTorchStreamReader reader(source);
-    if (reader.hasRecord("byteorder")) {
-      auto [data, size] = reader.getRecord("byteorder");
+    RecordReader reader(path);
+    if (reader.has("byteorder")) {
+      auto [data, size] = reader.read("byteorder", "byte order");
       require(std::string_view(static_cast<const char*>(data.get()), size) == "little",
               source + ": big-endian checkpoints are not supported");
     }
-    require(reader.hasRecord("data.pkl"), source + ": zip archive without data.pkl (not a torch.save file)");
-    auto [pkl, pkl_size] = reader.getRecord("data.pkl");
+    require(reader.has("data.pkl"), source + ": zip archive without data.pkl (not a torch.save file)");
+    auto [pkl, pkl_size] = reader.read("data.pkl", "the pickled state dict");
     StateDictHooks hooks(source);
     const Value root = pickle::unpickle(std::string_view(static_cast<const char*>(pkl.get()), pkl_size), hooks,
                                         source + ":data.pkl");

@@ -7,8 +7,9 @@
 // (Float, Double, Half, BFloat16, Long, Int, Short, Char, Byte, Bool): any other global (code the
 // file would run in Python) is refused. Storage offsets, strides and storages shared between tensors
 // are honoured: tensors are returned as views of their (shared) storage, on the CPU.
-// The legacy pre-1.6 format, truncated or corrupt archives, non-tensor entries and views reaching
-// outside their storage are u3d::Error naming the file (and tensor).
+// Every record is checked against its zip CRC-32. The legacy pre-1.6 format, truncated or corrupt
+// archives, non-tensor entries and views reaching outside their storage are u3d::Error naming the
+// file (and tensor).
 #include <filesystem>
 
 #include "nn/tensor_map.h"

@@ -177,6 +177,25 @@ TEST_F(PthTest, TruncatedArchiveNamesTheFile) {
   expect_error(path, {"truncated.pth", "corrupt or truncated"});
 }
 
+// libtorch's zip reader skips CRCs; the reader checks them so a damaged weight is not loaded silently.
+TEST_F(PthTest, FlippedByteInAWeightFailsTheCrc) {
+  const torch::Tensor w = torch::arange(64, torch::kFloat32);
+  PickleWriter p;
+  p.empty_ordered_dict().mark().str("proj.weight").tensor("FloatStorage", "0", 64, 0, {64}, {1}).op('u');
+  const fs::path path = write_pth("flipped", p.finish(), {{"0", raw_bytes(w)}});
+  EXPECT_TRUE(torch::equal(load_pth(path).at("proj.weight"), w));
+
+  std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(f)), {});
+  const std::string needle = raw_bytes(w).substr(40, 16);  // a piece of the weight's bytes
+  const size_t at = bytes.find(needle);
+  ASSERT_NE(at, std::string::npos);
+  f.seekp(std::streamoff(at + 3));
+  f.put(char(bytes[at + 3] ^ 0x10));
+  f.close();
+  expect_error(path, {"flipped.pth", "proj.weight", "data/0", "CRC"});
+}
+
 TEST_F(PthTest, CorruptPickleIsAnError) {
   PickleWriter p;
   p.empty_ordered_dict().mark().str("w").op('\xff');
