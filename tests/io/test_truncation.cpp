@@ -28,7 +28,9 @@ void check_every_prefix(const fs::path& dir, const std::string& name, const Mesh
     }
   }
   // Text formats may legitimately end at a line break; binary ones never before their last byte.
-  if (fs::path(name).extension() != ".obj") EXPECT_EQ(accepted, 0u) << name;
+  if (fs::path(name).extension() != ".obj") {
+    EXPECT_EQ(accepted, 0u) << name;
+  }
 }
 
 }  // namespace
