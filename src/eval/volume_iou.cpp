@@ -4,15 +4,20 @@
 
 #include "core/error.h"
 #include "eval/triangle_bvh.h"
+#include "eval/triangle_split.h"
 #include "eval/winding_number.h"
 
 namespace u3d {
 
 std::vector<uint8_t> occupancy_grid(const Mesh& mesh, const Eigen::AlignedBox3f& box, int resolution) {
   require(resolution >= 2, "occupancy grid resolution must be at least 2, got " + std::to_string(resolution));
-  TriangleBvh bvh(mesh.positions, mesh.faces);
-  WindingNumber winding(bvh);
   const Vec3f cell = box.sizes() / float(resolution);
+  // Pieces no longer than two cells keep the hierarchy's clusters small near every cell centre.
+  require(!mesh.faces.empty(), "occupancy grid of a mesh without faces");
+  require((box.sizes().array() > 0).all(), "occupancy grid box must have a positive size along every axis");
+  TriangleSoup pieces = split_long_triangles(mesh.positions, mesh.faces, 2.f * cell.maxCoeff());
+  TriangleBvh bvh(pieces.positions, pieces.faces);
+  WindingNumber winding(bvh);
   const long n = long(resolution) * resolution * resolution;
   std::vector<uint8_t> inside(n);
 #pragma omp parallel for schedule(dynamic, 256)

@@ -6,6 +6,7 @@
 #include "core/error.h"
 #include "eval/surface_sampling.h"
 #include "eval/triangle_bvh.h"
+#include "eval/triangle_split.h"
 #include "eval/winding_number.h"
 #include "test_shapes.h"
 
@@ -106,4 +107,29 @@ TEST(WindingNumber, OpenBoxIsStillInsideAtItsCentre) {
   box.faces.resize(10);
   TriangleBvh bvh(box.positions, box.faces);
   EXPECT_NEAR(WindingNumber(bvh)({0, 0, 0}), 5.0 / 6.0, 1e-6);
+}
+
+TEST(TriangleSplit, PiecesTileTheTriangleWithShortEdgesAndTheSameOrientation) {
+  // A long sliver (as in fans of surfaces of revolution) and a short triangle that stays as it is.
+  std::vector<Vec3f> p = {{0, 0, 0}, {1, 0, 0}, {0.5f, 0.05f, 0.02f}, {0, 0, 1}, {0.01f, 0, 1}, {0, 0.01f, 1}};
+  std::vector<Vec3i> f = {{0, 1, 2}, {3, 4, 5}};
+  TriangleSoup s = split_long_triangles(p, f, 0.1f);
+  EXPECT_GT(s.faces.size(), 10u);
+  EXPECT_EQ(s.faces.back(), Vec3i(3, 4, 5));  // short triangles keep their shared vertices
+  Eigen::Vector3d area_vector = Eigen::Vector3d::Zero();
+  for (size_t i = 0; i + 1 < s.faces.size(); ++i) {
+    const auto& t = s.faces[i];
+    for (int k = 0; k < 3; ++k) EXPECT_LE((s.positions[t[(k + 1) % 3]] - s.positions[t[k]]).norm(), 0.1f + 1e-6f);
+    area_vector += 0.5 * (s.positions[t[1]] - s.positions[t[0]]).cross(s.positions[t[2]] - s.positions[t[0]]).cast<double>();
+  }
+  Eigen::Vector3d original = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).cast<double>();
+  EXPECT_TRUE(area_vector.isApprox(original, 1e-5)) << area_vector.transpose();
+}
+
+TEST(TriangleSplit, WindingNumbersAreUnchanged) {
+  Mesh box = test::box_mesh({-0.5f, -0.5f, -0.5f}, {0.5f, 0.5f, 0.5f});
+  TriangleSoup s = split_long_triangles(box.positions, box.faces, 0.2f);
+  EXPECT_GT(s.faces.size(), 12u * 16u);
+  for (const Vec3f& q : {Vec3f(0, 0, 0), Vec3f(0.45f, -0.3f, 0.2f), Vec3f(0.7f, 0, 0), Vec3f(0.52f, 0.1f, 0.1f)})
+    EXPECT_NEAR(winding_number_exact(s.positions, s.faces, q), winding_number_exact(box.positions, box.faces, q), 1e-9);
 }
