@@ -57,11 +57,14 @@ void run(const ReconstructArgs& args) {
 
   StageTimer write_timer("writing " + args.output);
   write_mesh(result.mesh, out);
+  const double write_seconds = write_timer.finish();
+  double preview_seconds = 0.0;
   if (args.preview) {
+    StageTimer preview_timer("rendering previews");
     save_image(preview_four_views(in_view_frame), with_suffix(out, "_views.png"));
     save_image(preview_turntable(in_view_frame), with_suffix(out, "_turntable.png"));
+    preview_seconds = preview_timer.finish();
   }
-  const double write_seconds = write_timer.finish();
 
   std::printf("mesh: %zu vertices, %zu faces, %s\n", result.mesh.vertex_count(), result.mesh.face_count(),
               topo.summary().c_str());
@@ -69,12 +72,14 @@ void run(const ReconstructArgs& args) {
               result.colouring.completed, result.colouring.unreachable);
   std::printf("silhouette IoU: front %.4f, right %.4f, back %.4f, left %.4f\n", iou[0], iou[1], iou[2], iou[3]);
   std::printf("time: load %.2f s", load_seconds);
-  double total = load_seconds + write_seconds;
+  double total = load_seconds + write_seconds + preview_seconds;
   for (const StageTiming& t : result.timings) {
     std::printf(", %s %.2f s", t.name.c_str(), t.seconds);
     total += t.seconds;
   }
-  std::printf(", write %.2f s, total %.2f s\n", write_seconds, total);
+  std::printf(", write %.2f s", write_seconds);
+  if (args.preview) std::printf(", previews %.2f s", preview_seconds);
+  std::printf(", total %.2f s\n", total);
 }
 
 const CommandRegistration registration{

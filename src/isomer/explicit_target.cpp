@@ -14,8 +14,7 @@ namespace {
 Vec4f sample_rgba(const Image& image, float px, float py) {
   const float x = std::clamp(px - 0.5f, 0.f, float(image.width - 1));
   const float y = std::clamp(py - 0.5f, 0.f, float(image.height - 1));
-  const int x0 = std::min(int(x), image.width - 2 < 0 ? 0 : image.width - 2);
-  const int y0 = std::min(int(y), image.height - 2 < 0 ? 0 : image.height - 2);
+  const int x0 = int(x), y0 = int(y);  // x, y >= 0 after clamping
   const int x1 = std::min(x0 + 1, image.width - 1), y1 = std::min(y0 + 1, image.height - 1);
   const float fx = x - x0, fy = y - y0;
   Vec4f out;

@@ -72,9 +72,37 @@ struct LineSums {
   }
 };
 
+// floor() for coordinates above -kOffset without a libm call per pixel (exact: a float plus the
+// offset is representable in a double).
+inline int fast_floor(float x) {
+  constexpr int kOffset = 1 << 20;
+  return int(double(x) + kOffset) - kOffset;
+}
+
+// Bilinear sample of an interleaved two-channel field, zero outside the image.
+inline Eigen::Vector2f sample2(const float* img, int w, int h, float x, float y) {
+  const int x0 = fast_floor(x), y0 = fast_floor(y);
+  const float fx = x - x0, fy = y - y0;
+  if (x0 >= 0 && y0 >= 0 && x0 + 1 < w && y0 + 1 < h) {  // interior: no bounds checks
+    const float* p = img + 2 * (size_t(y0) * w + x0);
+    const float* q = p + 2 * size_t(w);
+    const float a = (1 - fx) * (1 - fy), b = fx * (1 - fy), c = (1 - fx) * fy, d = fx * fy;
+    return {a * p[0] + b * p[2] + c * q[0] + d * q[2], a * p[1] + b * p[3] + c * q[1] + d * q[3]};
+  }
+  Eigen::Vector2f out(0, 0);
+  for (int dy = 0; dy <= 1; ++dy)
+    for (int dx = 0; dx <= 1; ++dx) {
+      const int xx = x0 + dx, yy = y0 + dy;
+      if (xx < 0 || yy < 0 || xx >= w || yy >= h) continue;
+      const float wgt = (dx ? fx : 1 - fx) * (dy ? fy : 1 - fy);
+      out += wgt * Eigen::Vector2f(img[2 * (size_t(yy) * w + xx)], img[2 * (size_t(yy) * w + xx) + 1]);
+    }
+  return out;
+}
+
 // Bilinear sample with zero outside the image.
 inline float sample(const float* img, int w, int h, float x, float y) {
-  const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
+  const int x0 = fast_floor(x), y0 = fast_floor(y);
   const float fx = x - x0, fy = y - y0;
   auto at = [&](int xx, int yy) { return (xx < 0 || yy < 0 || xx >= w || yy >= h) ? 0.f : img[size_t(yy) * w + xx]; };
   return (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x0 + 1, y0)) + fy * ((1 - fx) * at(x0, y0 + 1) + fx * at(x0 + 1, y0 + 1));
@@ -110,13 +138,9 @@ std::vector<float> integrate_normal_map(const std::vector<Vec3f>& normals, const
   for (size_t i = 0; i < n; ++i) known.data[i] = mask[i] ? 1 : 0;
   extend_into_background(slopes, known, 2);
 
-  std::vector<float> su_src(n), sv_src(n), mask_src(n);
-  for (size_t i = 0; i < n; ++i) {
-    const cv::Vec2f g = slopes.at<cv::Vec2f>(int(i / width), int(i % width));
-    su_src[i] = g[0];
-    sv_src[i] = g[1];
-    mask_src[i] = mask[i] ? 1.f : 0.f;
-  }
+  const float* slopes_src = reinterpret_cast<const float*>(slopes.data);  // interleaved (u, v), continuous
+  std::vector<float> mask_src(n);
+  for (size_t i = 0; i < n; ++i) mask_src[i] = mask[i] ? 1.f : 0.f;
   std::vector<int> fg_pixels;
   Eigen::Vector2i box_min(width, height), box_max(-1, -1);
   for (size_t i = 0; i < n; ++i)
@@ -157,10 +181,11 @@ std::vector<float> integrate_normal_map(const std::vector<Vec3f>& normals, const
           const float x = co * dx - si * dy + cx, y = si * dx + co * dy + cy;
           const size_t i = size_t(Y) * side + X;
           // Nearest pixel decides inside/outside (cheap); slopes are interpolated.
-          const int xn = int(std::lround(x)), yn = int(std::lround(y));
+          const int xn = fast_floor(x + 0.5f), yn = fast_floor(y + 0.5f);
           inside[i] = xn >= 0 && yn >= 0 && xn < width && yn < height && mask_src[size_t(yn) * width + xn] > 0.f;
           if (!inside[i]) continue;
-          const float gu = sample(su_src.data(), width, height, x, y), gv = sample(sv_src.data(), width, height, x, y);
+          const Eigen::Vector2f g = sample2(slopes_src, width, height, x, y);
+          const float gu = g.x(), gv = g.y();
           su[i] = co * gu + si * gv;
           sv[i] = -si * gu + co * gv;
         }
