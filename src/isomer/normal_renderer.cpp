@@ -37,6 +37,7 @@ NormalRenderer::NormalRenderer(std::vector<Camera> cameras) {
     v.grad_image = Image(w, h, kChannels);
     v.grad_color = Image(w, h, kChannels);
     v.grad_bary.assign(size_t(w) * h, Vec2f::Zero());
+    v.listed.assign(size_t(w) * h, 0);
   }
 }
 
@@ -59,13 +60,15 @@ void NormalRenderer::render(const std::vector<Vec3f>& positions, const std::vect
       std::copy_n(v.color.data.data() + size_t(p) * kChannels, kChannels, v.image.data.data() + size_t(p) * kChannels);
     v.pairs = find_antialias_pairs(v.raster, faces, neighbors_, v.projection);
     apply_antialias(v.pairs, v.color, v.image);
+    // Active = covered pixels plus each uncovered pixel a blend changes (once).
     v.active = v.covered;
     for (const AntialiasPair& pair : v.pairs) {
       const int32_t target = pair.alpha > 0.f ? pair.pixel0 : pair.pixel1;
-      if (!v.raster.covered(target)) v.active.push_back(target);
+      if (v.raster.covered(target) || v.listed[target]) continue;
+      v.active.push_back(target);
+      v.listed[target] = 1;
     }
-    std::sort(v.active.begin(), v.active.end());
-    v.active.erase(std::unique(v.active.begin(), v.active.end()), v.active.end());
+    for (size_t k = v.covered.size(); k < v.active.size(); ++k) v.listed[v.active[k]] = 0;
     zero_pixels(v.grad_image, v.active);
   }
 }

@@ -8,27 +8,31 @@
 namespace u3d {
 
 EdgeNeighbors edge_neighbors(const std::vector<Vec3i>& faces) {
-  // Directed edge (a -> b) of every face with the face's third vertex, sorted for lookup.
-  struct Directed {
-    uint64_t key;
-    int32_t third;
-  };
-  auto key = [](int a, int b) { return (uint64_t(uint32_t(a)) << 32) | uint32_t(b); };
-  std::vector<Directed> directed;
-  directed.reserve(faces.size() * 3);
+  // Directed edges a -> b bucketed by a (counting sort), each with its face's third vertex.
+  int vertex_count = 0;
+  for (const Vec3i& f : faces) vertex_count = std::max(vertex_count, f.maxCoeff() + 1);
+  std::vector<int> offsets(size_t(vertex_count) + 1, 0);
   for (const Vec3i& f : faces)
-    for (int i = 0; i < 3; ++i) directed.push_back({key(f[(i + 1) % 3], f[(i + 2) % 3]), f[i]});
-  std::sort(directed.begin(), directed.end(), [](const Directed& a, const Directed& b) { return a.key < b.key; });
+    for (int i = 0; i < 3; ++i) ++offsets[f[i] + 1];
+  for (int v = 0; v < vertex_count; ++v) offsets[v + 1] += offsets[v];
+  std::vector<std::pair<int, int>> outgoing(faces.size() * 3);  // (b, third)
+  std::vector<int> fill(offsets.begin(), offsets.end() - 1);
+  for (const Vec3i& f : faces)
+    for (int i = 0; i < 3; ++i) outgoing[fill[f[i]]++] = {f[(i + 1) % 3], f[(i + 2) % 3]};
   EdgeNeighbors n;
   n.opposite.resize(faces.size());
   for (size_t fi = 0; fi < faces.size(); ++fi) {
     const Vec3i& f = faces[fi];
     for (int i = 0; i < 3; ++i) {
-      // The neighbour traverses this edge the other way round.
-      const uint64_t k = key(f[(i + 2) % 3], f[(i + 1) % 3]);
-      auto it = std::lower_bound(directed.begin(), directed.end(), k,
-                                 [](const Directed& d, uint64_t k) { return d.key < k; });
-      n.opposite[fi][i] = (it != directed.end() && it->key == k) ? it->third : -1;
+      // The neighbour traverses this edge the other way round: from f[i + 2] to f[i + 1].
+      const int from = f[(i + 2) % 3], to = f[(i + 1) % 3];
+      int third = -1;
+      for (int k = offsets[from]; k < offsets[from + 1]; ++k)
+        if (outgoing[k].first == to) {
+          third = outgoing[k].second;
+          break;
+        }
+      n.opposite[fi][i] = third;
     }
   }
   return n;
