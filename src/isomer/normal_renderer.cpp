@@ -45,7 +45,7 @@ void NormalRenderer::render(const std::vector<Vec3f>& positions, const std::vect
                             const std::vector<Vec3f>& vertex_normals) {
   attributes_ = normal_color_attributes(vertex_normals);
   neighbors_ = edge_neighbors(faces);
-#pragma omp parallel for schedule(dynamic, 1)
+#pragma omp parallel for schedule(dynamic, 1) if (views_.size() > 1)
   for (size_t i = 0; i < views_.size(); ++i) {
     RenderedView& v = views_[i];
     // Forget the previous frame's footprint.
@@ -86,7 +86,7 @@ void NormalRenderer::render_attribute(const std::vector<Vec3i>& faces, const std
 void NormalRenderer::backward(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& faces,
                               const VertexNormals& normals, std::vector<Vec3f>& grad_positions) {
   const size_t n = positions.size();
-#pragma omp parallel for schedule(dynamic, 1)
+#pragma omp parallel for schedule(dynamic, 1) if (views_.size() > 1)
   for (size_t i = 0; i < views_.size(); ++i) {
     RenderedView& v = views_[i];
     // Identity part of the anti-aliasing backward, then its blend and edge parts.

@@ -5,17 +5,21 @@
 #include "isomer/mesh_optimizer.h"
 #include "isomer/normal_renderer.h"
 #include "isomer/reconstruction_losses.h"
+#include "isomer/view_resolution.h"
 
 namespace u3d {
 
-StageMesh run_refine_stage(const StageMesh& coarse, const std::vector<Image>& normal_maps,
-                           const std::vector<Camera>& cameras, const RefineStageOptions& options,
+StageMesh run_refine_stage(const StageMesh& coarse, const std::vector<Image>& input_maps,
+                           const std::vector<Camera>& input_cameras, const RefineStageOptions& options,
                            StageReport* report) {
-  require(!normal_maps.empty() && normal_maps.size() == cameras.size(), "refine stage: one normal map per camera");
-  for (size_t i = 0; i < cameras.size(); ++i)
-    require(normal_maps[i].width == cameras[i].width && normal_maps[i].height == cameras[i].height,
+  require(!input_maps.empty() && input_maps.size() == input_cameras.size(), "refine stage: one normal map per camera");
+  for (size_t i = 0; i < input_cameras.size(); ++i)
+    require(input_maps[i].width == input_cameras[i].width && input_maps[i].height == input_cameras[i].height,
             "refine stage: normal map " + std::to_string(i) + " does not match its camera resolution");
   StageTimer timer("mesh refinement");
+  const ViewsAtResolution views = views_at_resolution(input_maps, input_cameras, options.render_resolution);
+  const std::vector<Image>& normal_maps = views.normal_maps;
+  const std::vector<Camera>& cameras = views.cameras;
   std::vector<NormalTarget> targets;
   for (const Image& map : normal_maps) targets.push_back(make_normal_target(map));
 

@@ -28,6 +28,7 @@ struct RefineStageOptions {
   // false: the plain multi-view loss (rendered normals toward each view's own map), for comparison.
   bool use_explicit_target = true;
   ExplicitTargetOptions explicit_target;
+  int render_resolution = 0;  // longest side the views are rendered at (0 = the maps' own)
   unsigned seed = 2;
 };
 
