@@ -90,5 +90,5 @@ static void BM_Stages512(benchmark::State& state) {
     state.counters["vertices"] = double(refined.positions.size());
   }
 }
-BENCHMARK(BM_Stages512)->Arg(30000)->Iterations(1)->Unit(benchmark::kSecond);
+BENCHMARK(BM_Stages512)->Arg(20000)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK_MAIN();
