@@ -6,6 +6,7 @@
 #include "isomer/mesh_optimizer.h"
 #include "isomer/normal_renderer.h"
 #include "isomer/reconstruction_losses.h"
+#include "isomer/view_resolution.h"
 
 namespace u3d {
 
@@ -22,14 +23,17 @@ StageMesh sphere_initial_mesh() {
   return {m.positions, m.faces};
 }
 
-StageMesh run_coarse_stage(const StageMesh& initial, const std::vector<Image>& normal_maps,
-                           const std::vector<Camera>& cameras, const CoarseStageOptions& options,
+StageMesh run_coarse_stage(const StageMesh& initial, const std::vector<Image>& input_maps,
+                           const std::vector<Camera>& input_cameras, const CoarseStageOptions& options,
                            StageReport* report) {
-  require(!normal_maps.empty() && normal_maps.size() == cameras.size(), "coarse stage: one normal map per camera");
-  for (size_t i = 0; i < cameras.size(); ++i)
-    require(normal_maps[i].width == cameras[i].width && normal_maps[i].height == cameras[i].height,
+  require(!input_maps.empty() && input_maps.size() == input_cameras.size(), "coarse stage: one normal map per camera");
+  for (size_t i = 0; i < input_cameras.size(); ++i)
+    require(input_maps[i].width == input_cameras[i].width && input_maps[i].height == input_cameras[i].height,
             "coarse stage: normal map " + std::to_string(i) + " does not match its camera resolution");
   StageTimer timer("coarse reconstruction");
+  const ViewsAtResolution views = views_at_resolution(input_maps, input_cameras, options.render_resolution);
+  const std::vector<Image>& normal_maps = views.normal_maps;
+  const std::vector<Camera>& cameras = views.cameras;
   std::vector<NormalTarget> targets;
   std::vector<const Image*> references;
   for (const Image& map : normal_maps) targets.push_back(make_normal_target(map));

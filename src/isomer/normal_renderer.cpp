@@ -37,6 +37,7 @@ NormalRenderer::NormalRenderer(std::vector<Camera> cameras) {
     v.grad_image = Image(w, h, kChannels);
     v.grad_color = Image(w, h, kChannels);
     v.grad_bary.assign(size_t(w) * h, Vec2f::Zero());
+    v.listed.assign(size_t(w) * h, 0);
   }
 }
 
@@ -44,7 +45,7 @@ void NormalRenderer::render(const std::vector<Vec3f>& positions, const std::vect
                             const std::vector<Vec3f>& vertex_normals) {
   attributes_ = normal_color_attributes(vertex_normals);
   neighbors_ = edge_neighbors(faces);
-#pragma omp parallel for schedule(dynamic, 1)
+#pragma omp parallel for schedule(dynamic, 1) if (views_.size() > 1)
   for (size_t i = 0; i < views_.size(); ++i) {
     RenderedView& v = views_[i];
     // Forget the previous frame's footprint.
@@ -59,13 +60,15 @@ void NormalRenderer::render(const std::vector<Vec3f>& positions, const std::vect
       std::copy_n(v.color.data.data() + size_t(p) * kChannels, kChannels, v.image.data.data() + size_t(p) * kChannels);
     v.pairs = find_antialias_pairs(v.raster, faces, neighbors_, v.projection);
     apply_antialias(v.pairs, v.color, v.image);
+    // Active = covered pixels plus each uncovered pixel a blend changes (once).
     v.active = v.covered;
     for (const AntialiasPair& pair : v.pairs) {
       const int32_t target = pair.alpha > 0.f ? pair.pixel0 : pair.pixel1;
-      if (!v.raster.covered(target)) v.active.push_back(target);
+      if (v.raster.covered(target) || v.listed[target]) continue;
+      v.active.push_back(target);
+      v.listed[target] = 1;
     }
-    std::sort(v.active.begin(), v.active.end());
-    v.active.erase(std::unique(v.active.begin(), v.active.end()), v.active.end());
+    for (size_t k = v.covered.size(); k < v.active.size(); ++k) v.listed[v.active[k]] = 0;
     zero_pixels(v.grad_image, v.active);
   }
 }
@@ -83,7 +86,7 @@ void NormalRenderer::render_attribute(const std::vector<Vec3i>& faces, const std
 void NormalRenderer::backward(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& faces,
                               const VertexNormals& normals, std::vector<Vec3f>& grad_positions) {
   const size_t n = positions.size();
-#pragma omp parallel for schedule(dynamic, 1)
+#pragma omp parallel for schedule(dynamic, 1) if (views_.size() > 1)
   for (size_t i = 0; i < views_.size(); ++i) {
     RenderedView& v = views_[i];
     // Identity part of the anti-aliasing backward, then its blend and edge parts.

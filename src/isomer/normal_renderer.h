@@ -33,6 +33,7 @@ struct RenderedView {
   std::vector<Vec2f> grad_bary;
   std::vector<float> grad_attributes;
   ScreenGradient screen_grad;
+  std::vector<uint8_t> listed;  // per pixel, while collecting the uncovered active pixels
   std::vector<Vec3f> grad_positions;
 };
 

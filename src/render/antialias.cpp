@@ -8,27 +8,31 @@
 namespace u3d {
 
 EdgeNeighbors edge_neighbors(const std::vector<Vec3i>& faces) {
-  // Directed edge (a -> b) of every face with the face's third vertex, sorted for lookup.
-  struct Directed {
-    uint64_t key;
-    int32_t third;
-  };
-  auto key = [](int a, int b) { return (uint64_t(uint32_t(a)) << 32) | uint32_t(b); };
-  std::vector<Directed> directed;
-  directed.reserve(faces.size() * 3);
+  // Directed edges a -> b bucketed by a (counting sort), each with its face's third vertex.
+  int vertex_count = 0;
+  for (const Vec3i& f : faces) vertex_count = std::max(vertex_count, f.maxCoeff() + 1);
+  std::vector<int> offsets(size_t(vertex_count) + 1, 0);
   for (const Vec3i& f : faces)
-    for (int i = 0; i < 3; ++i) directed.push_back({key(f[(i + 1) % 3], f[(i + 2) % 3]), f[i]});
-  std::sort(directed.begin(), directed.end(), [](const Directed& a, const Directed& b) { return a.key < b.key; });
+    for (int i = 0; i < 3; ++i) ++offsets[f[i] + 1];
+  for (int v = 0; v < vertex_count; ++v) offsets[v + 1] += offsets[v];
+  std::vector<std::pair<int, int>> outgoing(faces.size() * 3);  // (b, third)
+  std::vector<int> fill(offsets.begin(), offsets.end() - 1);
+  for (const Vec3i& f : faces)
+    for (int i = 0; i < 3; ++i) outgoing[fill[f[i]]++] = {f[(i + 1) % 3], f[(i + 2) % 3]};
   EdgeNeighbors n;
   n.opposite.resize(faces.size());
   for (size_t fi = 0; fi < faces.size(); ++fi) {
     const Vec3i& f = faces[fi];
     for (int i = 0; i < 3; ++i) {
-      // The neighbour traverses this edge the other way round.
-      const uint64_t k = key(f[(i + 2) % 3], f[(i + 1) % 3]);
-      auto it = std::lower_bound(directed.begin(), directed.end(), k,
-                                 [](const Directed& d, uint64_t k) { return d.key < k; });
-      n.opposite[fi][i] = (it != directed.end() && it->key == k) ? it->third : -1;
+      // The neighbour traverses this edge the other way round: from f[i + 2] to f[i + 1].
+      const int from = f[(i + 2) % 3], to = f[(i + 1) % 3];
+      int third = -1;
+      for (int k = offsets[from]; k < offsets[from + 1]; ++k)
+        if (outgoing[k].first == to) {
+          third = outgoing[k].second;
+          break;
+        }
+      n.opposite[fi][i] = third;
     }
   }
   return n;
@@ -39,35 +43,51 @@ namespace {
 inline bool same_sign(float a, float b) { return std::signbit(a) == std::signbit(b); }
 inline float cross2(float ax, float ay, float bx, float by) { return ax * by - ay * bx; }
 
+// Per face, bit i set when the edge opposite corner i is a silhouette in this view: the neighbouring
+// face folds back onto the same side of it, i.e. the "wing" triangle (opposite vertex, edge) has the
+// same screen orientation as the face. Border edges always are.
+std::vector<uint8_t> silhouette_edges(const std::vector<Vec3i>& faces, const EdgeNeighbors& neighbors,
+                                      const ScreenProjection& proj) {
+  std::vector<uint8_t> mask(faces.size());
+  for (size_t fi = 0; fi < faces.size(); ++fi) {
+    const Vec3i& f = faces[fi];
+    const Vec2f p[3] = {proj.pixel[f[0]], proj.pixel[f[1]], proj.pixel[f[2]]};
+    const float bb = cross2(p[1].x() - p[0].x(), p[1].y() - p[0].y(), p[2].x() - p[0].x(), p[2].y() - p[0].y());
+    uint8_t bits = 0;
+    for (int i = 0; i < 3; ++i) {
+      const int o = neighbors.opposite[fi][i];
+      if (o < 0) {
+        bits |= uint8_t(1u << i);
+        continue;
+      }
+      const Vec2f& q = proj.pixel[o];
+      const Vec2f& a = p[(i + 1) % 3];
+      const Vec2f& b = p[(i + 2) % 3];
+      if (same_sign(cross2(a.x() - q.x(), a.y() - q.y(), b.x() - q.x(), b.y() - q.y()), bb)) bits |= uint8_t(1u << i);
+    }
+    mask[fi] = bits;
+  }
+  return mask;
+}
+
 // Analyses one pair of neighbouring pixels; returns false when nothing is blended.
-bool analyse_pair(const RasterBuffer& raster, const std::vector<Vec3i>& faces, const EdgeNeighbors& neighbors,
+bool analyse_pair(const RasterBuffer& raster, const std::vector<Vec3i>& faces, const std::vector<uint8_t>& silhouette,
                   const ScreenProjection& proj, int32_t p0, int32_t p1, bool down, AntialiasPair& out) {
   const int32_t t0 = raster.face_id[p0], t1 = raster.face_id[p1];
   // The nearer triangle owns the edge (the far one is occluded there, or background).
   int32_t tri = t0 >= 0 ? t0 : t1;
   if (t0 >= 0 && t1 >= 0) tri = raster.depth[p0] < raster.depth[p1] ? t0 : t1;
+  const uint8_t sil = silhouette[tri];
+  if (!sil) return false;
   const bool from1 = tri != t0;
   const int32_t origin = from1 ? p1 : p0;
   const float fx = float(origin % raster.width) + 0.5f, fy = float(origin / raster.width) + 0.5f;
   const Vec3i& f = faces[tri];
-  const Vec3i& o = neighbors.opposite[tri];
-  float x[3], y[3], ox[3], oy[3];
+  float x[3], y[3];
   for (int i = 0; i < 3; ++i) {
     x[i] = proj.pixel[f[i]].x() - fx;
     y[i] = proj.pixel[f[i]].y() - fy;
-    const int ov = o[i] >= 0 ? o[i] : f[i];  // a border edge behaves like a silhouette
-    ox[i] = proj.pixel[ov].x() - fx;
-    oy[i] = proj.pixel[ov].y() - fy;
   }
-  // An edge is a silhouette when the neighbouring face folds back onto the same side of it, i.e. the
-  // "wing" triangle (opposite vertex, edge) has the same screen orientation as the triangle.
-  const float bb = cross2(x[1] - x[0], y[1] - y[0], x[2] - x[0], y[2] - y[0]);
-  bool silhouette[3];
-  for (int i = 0; i < 3; ++i) {
-    const int j = (i + 1) % 3, k = (i + 2) % 3;
-    silhouette[i] = same_sign(cross2(x[j] - ox[i], y[j] - oy[i], x[k] - ox[i], y[k] - oy[i]), bb);
-  }
-  if (!silhouette[0] && !silhouette[1] && !silhouette[2]) return false;
   if (down)
     for (int i = 0; i < 3; ++i) std::swap(x[i], y[i]);
   // Now the neighbour lies along +x (or -x when the triangle is in pixel1): find where the edges
@@ -83,7 +103,7 @@ bool analyse_pair(const RasterBuffer& raster, const std::vector<Vec3i>& faces, c
     const float c = ds * (x[j] * dy - y[j] * (x[k] - x[j])) / dy;
     if (c > best_c) best_c = c, best = i;
   }
-  if (best < 0 || !silhouette[best]) return false;
+  if (best < 0 || !(sil & (1u << best))) return false;
   {
     const int j = (best + 1) % 3, k = (best + 2) % 3;
     // Edges closer to horizontal are handled by the perpendicular pixel pairs.
@@ -101,6 +121,7 @@ bool analyse_pair(const RasterBuffer& raster, const std::vector<Vec3i>& faces, c
 std::vector<AntialiasPair> find_antialias_pairs(const RasterBuffer& raster, const std::vector<Vec3i>& faces,
                                                 const EdgeNeighbors& neighbors, const ScreenProjection& projection) {
   std::vector<AntialiasPair> pairs;
+  const std::vector<uint8_t> silhouette = silhouette_edges(faces, neighbors, projection);
   const int w = raster.width, h = raster.height;
   AntialiasPair pair;
   for (int y = 0; y < h; ++y) {
@@ -108,9 +129,9 @@ std::vector<AntialiasPair> find_antialias_pairs(const RasterBuffer& raster, cons
     const int32_t* below = y + 1 < h ? row + w : nullptr;
     for (int x = 0; x < w; ++x) {
       const int32_t p = y * w + x;
-      if (x + 1 < w && row[x] != row[x + 1] && analyse_pair(raster, faces, neighbors, projection, p, p + 1, false, pair))
+      if (x + 1 < w && row[x] != row[x + 1] && analyse_pair(raster, faces, silhouette, projection, p, p + 1, false, pair))
         pairs.push_back(pair);
-      if (below && row[x] != below[x] && analyse_pair(raster, faces, neighbors, projection, p, p + w, true, pair))
+      if (below && row[x] != below[x] && analyse_pair(raster, faces, silhouette, projection, p, p + w, true, pair))
         pairs.push_back(pair);
     }
   }

@@ -9,11 +9,67 @@ namespace {
 inline Vec2f dcross_du(const Vec2f& v) { return {v.y(), -v.x()}; }
 inline Vec2f dcross_dv(const Vec2f& u) { return {-u.y(), u.x()}; }
 inline float cross2(const Vec2f& u, const Vec2f& v) { return u.x() * v.y() - u.y() * v.x(); }
+
+// Orthographic case: b_i = E_i(q) / A with E_i affine in the pixel centre q, so a face's gradient only
+// needs, per output barycentric k, G_k = sum_p g_k and Q_k = sum_p g_k q_p. Every affine expression in
+// r_j = a_j - q is then evaluated in homogeneous form r_j -> a_j G_k - Q_k.
+void orthographic_backward(const RasterBuffer& raster, std::span<const int32_t> pixels,
+                           const std::vector<Vec3i>& faces, const ScreenProjection& projection,
+                           const std::vector<Vec2f>& grad_bary, ScreenGradient& screen) {
+  struct Moments {
+    float g[2] = {0.f, 0.f};
+    Vec2f q[2] = {Vec2f::Zero(), Vec2f::Zero()};
+    bool used = false;
+  };
+  std::vector<Moments> moments(faces.size());
+  for (int32_t p : pixels) {
+    const Vec2f& g = grad_bary[p];
+    if (g.x() == 0.f && g.y() == 0.f) continue;
+    Moments& m = moments[raster.face_id[p]];
+    const Vec2f q(float(p % raster.width) + 0.5f, float(p / raster.width) + 0.5f);
+    m.g[0] += g.x(), m.g[1] += g.y();
+    m.q[0] += g.x() * q, m.q[1] += g.y() * q;
+    m.used = true;
+  }
+  for (size_t f = 0; f < faces.size(); ++f) {
+    const Moments& m = moments[f];
+    if (!m.used) continue;
+    const Vec3i& c = faces[f];
+    const Vec2f a[3] = {projection.pixel[c[0]], projection.pixel[c[1]], projection.pixel[c[2]]};
+    const float area = cross2(a[1] - a[0], a[2] - a[0]);
+    if (std::abs(area) < 1e-12f) continue;
+    Vec2f grad[3] = {Vec2f::Zero(), Vec2f::Zero(), Vec2f::Zero()};
+    for (int k = 0; k < 2; ++k) {
+      const int i = k + 1;  // output barycentric b_i (b1 or b2)
+      const float G = m.g[k];
+      const Vec2f& Q = m.q[k];
+      const Vec2f r[3] = {a[0] * G - Q, a[1] * G - Q, a[2] * G - Q};  // homogeneous a_j - q
+      // sum_p g E_i(q_p): E_i = cross(r_{i+1}, r_{i+2}) is affine in q, so one factor stays plain.
+      const int j = (i + 1) % 3, l = (i + 2) % 3;
+      const float e = cross2(a[j], a[l]) * G - cross2(a[j], Q) + cross2(a[l], Q);
+      // d E_i / d a_j = dcross_du(r_l), d E_i / d a_l = dcross_dv(r_j); d A / d a_* from the triangle.
+      grad[j] += dcross_du(r[l]) / area;
+      grad[l] += dcross_dv(r[j]) / area;
+      // Through the area A = cross(a1 - a0, a2 - a0).
+      const float scale = -e / (area * area);
+      const Vec2f da1 = dcross_du(a[2] - a[0]), da2 = dcross_dv(a[1] - a[0]);
+      grad[1] += scale * da1;
+      grad[2] += scale * da2;
+      grad[0] -= scale * (da1 + da2);
+    }
+    for (int j = 0; j < 3; ++j) screen.pixel[c[j]] += grad[j];
+  }
+}
+
 }  // namespace
 
 void barycentric_backward(const RasterBuffer& raster, std::span<const int32_t> pixels, const std::vector<Vec3i>& faces,
                           const ScreenProjection& projection, const std::vector<Vec2f>& grad_bary,
                           ScreenGradient& screen) {
+  if (projection.orthographic) {
+    orthographic_backward(raster, pixels, faces, projection, grad_bary, screen);
+    return;
+  }
   for (int32_t p : pixels) {
     const Vec2f& g = grad_bary[p];
     if (g.x() == 0.f && g.y() == 0.f) continue;

@@ -7,6 +7,7 @@ ScreenProjection project_to_screen(const std::vector<Vec3f>& positions, const Ca
   s.clip_from_world = camera.projection * camera.world_to_camera;
   s.width = float(camera.width);
   s.height = float(camera.height);
+  s.orthographic = camera.orthographic;
   s.pixel.resize(positions.size());
   s.w.resize(positions.size());
   const Eigen::Matrix4f& m = s.clip_from_world;

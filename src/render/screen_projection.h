@@ -16,6 +16,7 @@ struct ScreenProjection {
   Eigen::Matrix4f clip_from_world = Eigen::Matrix4f::Identity();
   float width = 0.f;
   float height = 0.f;
+  bool orthographic = true;  // w == 1 everywhere: barycentrics are affine in the pixel position
 };
 
 ScreenProjection project_to_screen(const std::vector<Vec3f>& positions, const Camera& camera);

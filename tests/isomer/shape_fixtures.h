@@ -71,3 +71,39 @@ inline double chamfer_distance(const std::vector<Vec3f>& a, const std::vector<Ve
 }
 
 }  // namespace u3d::test
+
+namespace u3d::test {
+
+// Mean angle (degrees) between the rendered normals of a mesh and reference normal maps, over the
+// pixels both cover confidently.
+inline double mean_normal_error_deg(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& faces,
+                                    const std::vector<Image>& maps, const std::vector<Camera>& cameras) {
+  NormalRenderer r(cameras);
+  const VertexNormals n = compute_vertex_normals(positions, faces);
+  r.render(positions, faces, n.unit);
+  double sum = 0;
+  size_t count = 0;
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    const RenderedView& v = r.view(i);
+    for (int32_t p : v.covered) {
+      const float* a = v.image.data.data() + size_t(p) * 4;
+      const float* b = maps[i].data.data() + size_t(p) * 4;
+      if (a[3] < 0.99f || b[3] < 0.99f) continue;
+      const Vec3f na = Vec3f(a[0], a[1], a[2]) * 2.f - Vec3f::Ones();
+      const Vec3f nb = Vec3f(b[0], b[1], b[2]) * 2.f - Vec3f::Ones();
+      sum += std::acos(std::clamp(double(na.normalized().dot(nb.normalized())), -1.0, 1.0)) * 180.0 / M_PI;
+      ++count;
+    }
+  }
+  return count ? sum / double(count) : 180.0;
+}
+
+// The ellipsoid of bulged_ellipsoid() without its bulge, as a level-3 icosphere: a plausible coarse
+// mesh that misses detail the refinement has to recover.
+inline Mesh plain_ellipsoid() {
+  Mesh m = make_icosphere(3, 1.f);
+  for (Vec3f& p : m.positions) p = Vec3f(0.7f * p.x(), 0.55f * p.y(), 0.4f * p.z());
+  return m;
+}
+
+}  // namespace u3d::test

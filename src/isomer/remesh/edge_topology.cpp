@@ -1,7 +1,6 @@
 #include "isomer/remesh/edge_topology.h"
 
 #include <algorithm>
-#include <cstdint>
 
 namespace u3d {
 
@@ -14,42 +13,51 @@ bool EdgeTopology::adjacent(int a, int b) const {
 EdgeTopology build_edge_topology(const std::vector<Vec3i>& faces, size_t vertex_count) {
   EdgeTopology t;
   const size_t sides = faces.size() * 3;
-  // Sort face sides by their undirected edge key.
-  std::vector<std::pair<uint64_t, int>> keyed(sides);
+  // Bucket the face sides by their lower vertex (counting sort: linear time), then group each small
+  // bucket by the higher vertex.
+  std::vector<int> offsets(vertex_count + 1, 0);
+  for (const Vec3i& f : faces)
+    for (int i = 0; i < 3; ++i) ++offsets[std::min(f[i], f[(i + 1) % 3]) + 1];
+  for (size_t v = 0; v < vertex_count; ++v) offsets[v + 1] += offsets[v];
+  std::vector<std::pair<int, int>> bucket(sides);  // (higher vertex, side)
+  std::vector<int> fill(offsets.begin(), offsets.end() - 1);
   for (size_t f = 0; f < faces.size(); ++f)
     for (int i = 0; i < 3; ++i) {
       const int a = faces[f][i], b = faces[f][(i + 1) % 3];
-      const uint64_t key = (uint64_t(uint32_t(std::min(a, b))) << 32) | uint32_t(std::max(a, b));
-      keyed[f * 3 + i] = {key, int(f * 3 + i)};
+      bucket[fill[std::min(a, b)]++] = {std::max(a, b), int(f * 3 + i)};
     }
-  std::sort(keyed.begin(), keyed.end());
   t.face_edges.resize(faces.size());
-  for (size_t k = 0; k < sides;) {
-    size_t end = k;
-    while (end < sides && keyed[end].first == keyed[k].first) ++end;
-    const int e = int(t.edge_vertices.size());
-    const int lo = int(keyed[k].first >> 32), hi = int(keyed[k].first & 0xffffffffu);
-    t.edge_vertices.push_back({lo, hi});
-    std::array<int, 2> s = {EdgeTopology::kNone, EdgeTopology::kNone};
-    bool manifold = end - k <= 2;
-    for (size_t j = k; j < end; ++j) {
-      const int side = keyed[j].second;
-      const int from = faces[side / 3][side % 3];
-      const int slot = from == lo ? 0 : 1;
-      if (s[slot] != EdgeTopology::kNone) manifold = false;
-      s[slot] = side;
-      t.face_edges[side / 3][side % 3] = e;
+  t.edge_vertices.reserve(sides / 2 + 1);
+  t.edge_sides.reserve(sides / 2 + 1);
+  t.edge_manifold.reserve(sides / 2 + 1);
+  for (size_t lo = 0; lo < vertex_count; ++lo) {
+    auto first = bucket.begin() + offsets[lo], last = bucket.begin() + offsets[lo + 1];
+    std::sort(first, last);  // a handful of entries
+    for (auto k = first; k != last;) {
+      auto end = k;
+      while (end != last && end->first == k->first) ++end;
+      const int e = int(t.edge_vertices.size());
+      t.edge_vertices.push_back({int(lo), k->first});
+      std::array<int, 2> s = {EdgeTopology::kNone, EdgeTopology::kNone};
+      bool manifold = end - k <= 2;
+      for (auto j = k; j != end; ++j) {
+        const int side = j->second;
+        const int slot = faces[side / 3][side % 3] == int(lo) ? 0 : 1;
+        if (s[slot] != EdgeTopology::kNone) manifold = false;
+        s[slot] = side;
+        t.face_edges[side / 3][side % 3] = e;
+      }
+      t.edge_sides.push_back(s);
+      t.edge_manifold.push_back(manifold);
+      k = end;
     }
-    t.edge_sides.push_back(s);
-    t.edge_manifold.push_back(manifold);
-    k = end;
   }
   // Vertex rings from the unique edges.
   t.ring_offsets.assign(vertex_count + 1, 0);
   for (const auto& ev : t.edge_vertices) ++t.ring_offsets[ev[0] + 1], ++t.ring_offsets[ev[1] + 1];
   for (size_t v = 0; v < vertex_count; ++v) t.ring_offsets[v + 1] += t.ring_offsets[v];
   t.ring.resize(t.ring_offsets[vertex_count]);
-  std::vector<int> fill(t.ring_offsets.begin(), t.ring_offsets.end() - 1);
+  std::copy(t.ring_offsets.begin(), t.ring_offsets.end() - 1, fill.begin());
   for (const auto& ev : t.edge_vertices) t.ring[fill[ev[0]]++] = ev[1], t.ring[fill[ev[1]]++] = ev[0];
   return t;
 }

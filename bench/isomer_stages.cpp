@@ -1,0 +1,94 @@
+// ISOMER stage costs at the pipeline's 512 px: one differentiable render + loss + backward of the four
+// views, one remeshing pass, and the two full stages on a synthetic shape (exact normal maps of a
+// bulged ellipsoid, coarse stage from the sphere, refinement on its result).
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+
+#include "core/progress.h"
+#include "isomer/coarse_stage.h"
+#include "isomer/icosphere.h"
+#include "isomer/mesh_optimizer.h"
+#include "isomer/normal_renderer.h"
+#include "isomer/reconstruction_losses.h"
+#include "isomer/refine_stage.h"
+
+using namespace u3d;
+
+namespace {
+
+Mesh bulged_ellipsoid() {
+  Mesh m = make_icosphere(4, 1.f);
+  for (Vec3f& p : m.positions) {
+    const float bump = 0.25f * std::exp(-((p - Vec3f(0.6f, 0.3f, 0.75f)).squaredNorm()) / 0.15f);
+    p = Vec3f(0.7f * p.x(), 0.55f * p.y(), 0.4f * p.z()) * (1.f + bump);
+  }
+  return m;
+}
+
+std::vector<Camera> cameras(int res) {
+  std::vector<Camera> c;
+  for (View v : kAllViews) c.push_back(view_camera(v, res));
+  return c;
+}
+
+std::vector<Image> normal_maps(const Mesh& mesh, const std::vector<Camera>& cams) {
+  NormalRenderer r(cams);
+  r.render(mesh.positions, mesh.faces, compute_vertex_normals(mesh.positions, mesh.faces).unit);
+  std::vector<Image> maps;
+  for (size_t i = 0; i < cams.size(); ++i) maps.push_back(r.view(i).image);
+  return maps;
+}
+
+}  // namespace
+
+static void BM_RenderLossBackward512(benchmark::State& state) {
+  const Mesh mesh = bulged_ellipsoid();
+  const auto cams = cameras(512);
+  std::vector<NormalTarget> targets;
+  for (const Image& m : normal_maps(mesh, cams)) targets.push_back(make_normal_target(m));
+  std::vector<const Image*> refs;
+  for (const NormalTarget& t : targets) refs.push_back(&t.rgba);
+  const Mesh current = make_icosphere(int(state.range(0)), 0.6f);
+  NormalRenderer r(cams);
+  std::vector<Vec3f> grad;
+  for (auto _ : state) {
+    const VertexNormals n = compute_vertex_normals(current.positions, current.faces);
+    r.render(current.positions, current.faces, n.unit);
+    grad.assign(current.positions.size(), Vec3f::Zero());
+    benchmark::DoNotOptimize(masked_image_l2(r, refs, 4, 1.f) + background_alpha_l2(r, targets, 1.f));
+    r.backward(current.positions, current.faces, n, grad);
+  }
+  state.counters["faces"] = double(current.faces.size());
+}
+BENCHMARK(BM_RenderLossBackward512)->Arg(4)->Arg(6)->Unit(benchmark::kMillisecond);
+
+static void BM_RemeshPass(benchmark::State& state) {
+  const Mesh sphere = make_icosphere(int(state.range(0)), 0.8f);
+  MeshOptimizerOptions o;
+  o.max_edge_length = o.min_edge_length = 0.02f;
+  MeshOptimizer opt(sphere.positions, sphere.faces, o);
+  for (auto _ : state) benchmark::DoNotOptimize(opt.remesh());
+  state.counters["vertices"] = double(opt.positions().size());
+}
+BENCHMARK(BM_RemeshPass)->Arg(5)->Unit(benchmark::kMillisecond);
+
+static void BM_Stages512(benchmark::State& state) {
+  set_progress_quiet(true);
+  const Mesh truth = bulged_ellipsoid();
+  const auto cams = cameras(512);
+  const auto maps = normal_maps(truth, cams);
+  RefineStageOptions refine;
+  refine.max_vertices = size_t(state.range(0));
+  for (auto _ : state) {
+    StageReport coarse_report, refine_report;
+    const StageMesh coarse = run_coarse_stage(sphere_initial_mesh(), maps, cams, CoarseStageOptions::from_sphere(),
+                                              &coarse_report);
+    const StageMesh refined = run_refine_stage(coarse, maps, cams, refine, &refine_report);
+    state.counters["coarse_s"] = coarse_report.seconds;
+    state.counters["refine_s"] = refine_report.seconds;
+    state.counters["vertices"] = double(refined.positions.size());
+  }
+}
+BENCHMARK(BM_Stages512)->Arg(20000)->Iterations(1)->Unit(benchmark::kSecond);
+BENCHMARK_MAIN();

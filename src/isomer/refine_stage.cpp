@@ -1,0 +1,78 @@
+#include "isomer/refine_stage.h"
+
+#include "core/error.h"
+#include "core/progress.h"
+#include "isomer/mesh_optimizer.h"
+#include "isomer/normal_renderer.h"
+#include "isomer/reconstruction_losses.h"
+#include "isomer/view_resolution.h"
+
+namespace u3d {
+
+StageMesh run_refine_stage(const StageMesh& coarse, const std::vector<Image>& input_maps,
+                           const std::vector<Camera>& input_cameras, const RefineStageOptions& options,
+                           StageReport* report) {
+  require(!input_maps.empty() && input_maps.size() == input_cameras.size(), "refine stage: one normal map per camera");
+  for (size_t i = 0; i < input_cameras.size(); ++i)
+    require(input_maps[i].width == input_cameras[i].width && input_maps[i].height == input_cameras[i].height,
+            "refine stage: normal map " + std::to_string(i) + " does not match its camera resolution");
+  StageTimer timer("mesh refinement");
+  const ViewsAtResolution views = views_at_resolution(input_maps, input_cameras, options.render_resolution);
+  const std::vector<Image>& normal_maps = views.normal_maps;
+  const std::vector<Camera>& cameras = views.cameras;
+  std::vector<NormalTarget> targets;
+  for (const Image& map : normal_maps) targets.push_back(make_normal_target(map));
+
+  MeshOptimizerOptions opt;
+  opt.learning_rate = options.learning_rate;
+  opt.min_edge_length = options.end_edge_length;
+  opt.max_edge_length = options.start_edge_length;
+  opt.ramp = options.ramp;
+  opt.gain = options.gain;
+  opt.local_edge_length = false;
+  opt.max_vertices = options.max_vertices;
+  opt.seed = options.seed;
+  MeshOptimizer optimizer(coarse.positions, coarse.faces, opt);
+  NormalRenderer renderer(cameras);
+  std::vector<Image> target_images(cameras.size());
+  std::vector<const Image*> references;
+  if (options.use_explicit_target) {
+    for (const Image& img : target_images) references.push_back(&img);
+  } else {
+    for (const NormalTarget& t : targets) references.push_back(&t.rgba);
+  }
+  std::vector<Vec3f> grad;
+  double loss = 0.0;
+  for (int step = 0; step < options.steps; ++step) {
+    optimizer.set_learning_rate(optimizer.learning_rate() * options.lr_decay);
+    const std::vector<Vec3f>& positions = optimizer.positions();
+    const std::vector<Vec3i>& faces = optimizer.faces();
+    const VertexNormals normals = compute_vertex_normals(positions, faces);
+    renderer.render(positions, faces, normals.unit);
+    if (options.use_explicit_target &&
+        (step < options.update_warmup || step % std::max(options.update_interval, 1) == 0)) {
+      std::vector<const RasterBuffer*> rasters;
+      for (size_t i = 0; i < cameras.size(); ++i) rasters.push_back(&renderer.view(i).raster);
+      const std::vector<Vec3f> et = explicit_target_normals(positions, faces, normals.unit, normal_maps, cameras,
+                                                            rasters, options.explicit_target);
+      // The targets are rendered once here and then held fixed while the mesh moves.
+      for (size_t i = 0; i < cameras.size(); ++i) renderer.render_attribute(faces, et, i, target_images[i]);
+    }
+    grad.assign(positions.size(), Vec3f::Zero());
+    loss = masked_image_l2(renderer, references, 3, 1.f);
+    loss += background_alpha_l2(renderer, targets, 1.f);
+    loss += out_of_box_loss(positions, options.out_of_box_limit, options.out_of_box_weight, grad);
+    renderer.backward(positions, faces, normals, grad);
+    optimizer.step(grad);
+    optimizer.remesh();
+  }
+  if (report) {
+    report->steps = options.steps;
+    report->seconds = timer.finish();
+    report->final_loss = loss;
+    report->final_edge_length = optimizer.mean_reference_edge_length();
+  }
+  return {optimizer.positions(), optimizer.faces()};
+}
+
+}  // namespace u3d
