@@ -1,0 +1,59 @@
+#pragma once
+// The basic parameterised layers, with the parameter names torch.nn uses (weight, bias).
+// Unlike torch::nn's layers these allocate their parameters uninitialised (torch::empty) with the given
+// options: every weight comes from a checkpoint anyway, a full UNet is not randomly initialised for
+// nothing, and on the meta device nothing is allocated at all (used to check key names and shapes).
+#include <torch/torch.h>
+
+namespace u3d::nn {
+
+class LinearImpl : public torch::nn::Module {
+ public:
+  LinearImpl(int64_t in_features, int64_t out_features, bool bias, const torch::TensorOptions& options);
+  torch::Tensor forward(const torch::Tensor& x);
+  torch::Tensor weight, bias;  // bias undefined when disabled
+};
+TORCH_MODULE(Linear);
+
+class Conv2dImpl : public torch::nn::Module {
+ public:
+  Conv2dImpl(int64_t in_channels, int64_t out_channels, int64_t kernel, int64_t stride, int64_t padding, bool bias,
+             const torch::TensorOptions& options);
+  torch::Tensor forward(const torch::Tensor& x);
+  torch::Tensor weight, bias;
+  int64_t stride, padding;
+};
+TORCH_MODULE(Conv2d);
+
+class GroupNormImpl : public torch::nn::Module {
+ public:
+  GroupNormImpl(int64_t groups, int64_t channels, double eps, const torch::TensorOptions& options);
+  torch::Tensor forward(const torch::Tensor& x);
+  torch::Tensor weight, bias;
+  int64_t groups;
+  double eps;
+};
+TORCH_MODULE(GroupNorm);
+
+class LayerNormImpl : public torch::nn::Module {
+ public:
+  LayerNormImpl(int64_t dim, double eps, const torch::TensorOptions& options);
+  torch::Tensor forward(const torch::Tensor& x);
+  torch::Tensor weight, bias;
+  double eps;
+};
+TORCH_MODULE(LayerNorm);
+
+class EmbeddingImpl : public torch::nn::Module {
+ public:
+  EmbeddingImpl(int64_t count, int64_t dim, const torch::TensorOptions& options);
+  torch::Tensor forward(const torch::Tensor& indices);
+  torch::Tensor weight;
+};
+TORCH_MODULE(Embedding);
+
+// Fills every parameter of `module` with N(0, std^2) (deterministic given torch::manual_seed);
+// for benchmarks and tests that need a full-size network without a checkpoint.
+void randomize_parameters(torch::nn::Module& module, double std);
+
+}  // namespace u3d::nn

@@ -1,0 +1,58 @@
+#pragma once
+// Helpers for the golden-reference tests (tests/data/nn/<case>/, copied from the Python reference run).
+#include <gtest/gtest.h>
+#include <torch/torch.h>
+
+#include <filesystem>
+#include <string>
+
+#include "core/error.h"
+#include "nn/config_json.h"
+#include "nn/safetensors.h"
+#include "nn/tensor_map.h"
+
+namespace u3d::nn::test {
+
+inline std::filesystem::path golden_dir(const std::string& case_name) {
+  return std::filesystem::path(UNIQUE3D_TEST_DATA) / "nn" / case_name;
+}
+
+inline TensorMap golden_tensors(const std::string& case_name, const std::string& file) {
+  return load_safetensors(golden_dir(case_name) / (file + ".safetensors"));
+}
+
+inline nlohmann::json golden_config(const std::string& case_name, const std::string& file = "config.json") {
+  return read_json_file(golden_dir(case_name) / file);
+}
+
+// Copies each tensor of `weights` into the module's parameter of the same name. Every parameter must
+// be covered and every tensor used, with equal shapes. (Test-local stand-in for the strict loader.)
+inline void load_weights_strict(torch::nn::Module& module, const TensorMap& weights) {
+  torch::NoGradGuard no_grad;
+  auto params = module.named_parameters(true);
+  for (const auto& [name, tensor] : weights) {
+    torch::Tensor* p = params.find(name);
+    ASSERT_NE(p, nullptr) << "checkpoint key without parameter: " << name;
+    ASSERT_EQ(p->sizes(), tensor.sizes()) << name;
+    p->copy_(tensor);
+  }
+  for (const auto& item : params) ASSERT_TRUE(weights.count(item.key())) << "parameter not in checkpoint: " << item.key();
+}
+
+inline double max_abs_diff(const torch::Tensor& a, const torch::Tensor& b) {
+  EXPECT_EQ(a.sizes(), b.sizes());
+  if (a.sizes() != b.sizes()) return INFINITY;
+  return (a.to(torch::kDouble) - b.to(torch::kDouble)).abs().max().item<double>();
+}
+
+// The golden README's acceptance for single fp32 forward passes.
+constexpr double kForwardTolerance = 1e-4;
+
+#define EXPECT_CLOSE_TO_GOLDEN(actual, expected, tol)                                  \
+  do {                                                                                  \
+    double _err = ::u3d::nn::test::max_abs_diff((actual), (expected));                  \
+    EXPECT_LE(_err, (tol)) << #actual << " differs from the reference by " << _err;     \
+    ::testing::Test::RecordProperty("max_abs_err", std::to_string(_err));              \
+  } while (0)
+
+}  // namespace u3d::nn::test

@@ -1,0 +1,86 @@
+// The full-size networks, built from the real configs, have exactly the parameter names and shapes of
+// the Python libraries (manifests recorded from diffusers / transformers). Built on the meta device:
+// nothing is allocated.
+#include <gtest/gtest.h>
+
+#include <map>
+#include <vector>
+
+#include "golden.h"
+#include "nn/clip_vision.h"
+#include "nn/unet.h"
+#include "nn/vae.h"
+
+namespace u3d::nn {
+namespace {
+
+using namespace u3d::nn::test;
+using Shapes = std::map<std::string, std::vector<int64_t>>;
+
+nlohmann::json manifest(const std::string& name) { return golden_config("manifests", name + ".json"); }
+
+Shapes manifest_shapes(const nlohmann::json& m) {
+  Shapes out;
+  for (const auto& [key, shape] : m.at("tensors").items()) out[key] = shape.get<std::vector<int64_t>>();
+  return out;
+}
+
+Shapes module_shapes(torch::nn::Module& module) {
+  Shapes out;
+  for (const auto& p : module.named_parameters(true)) out[p.key()] = p.value().sizes().vec();
+  return out;
+}
+
+void expect_same_shapes(const Shapes& actual, const Shapes& expected) {
+  for (const auto& [key, shape] : expected) {
+    auto it = actual.find(key);
+    if (it == actual.end()) {
+      ADD_FAILURE() << "missing parameter " << key;
+      continue;
+    }
+    EXPECT_EQ(it->second, shape) << key;
+  }
+  for (const auto& [key, shape] : actual) EXPECT_TRUE(expected.count(key)) << "unexpected parameter " << key;
+}
+
+const torch::TensorOptions kMeta = torch::TensorOptions().device(torch::kMeta);
+
+TEST(Manifests, UNetSdImageVariations) {
+  auto m = manifest("unet_sd_image_variations_plain");
+  UNet2DConditionModel unet(UNetConfig::from_json(m.at("constructor_config"), "manifest"), kMeta);
+  Shapes shapes = module_shapes(*unet);
+  EXPECT_EQ(shapes.size(), m.at("num_tensors").get<size_t>());
+  expect_same_shapes(shapes, manifest_shapes(m));
+}
+
+TEST(Manifests, VaeSd1x) {
+  auto m = manifest("vae_sd1x");
+  AutoencoderKL vae(AutoencoderKLConfig::from_json(m.at("constructor_config"), "manifest"), kMeta);
+  Shapes expected = manifest_shapes(m);
+  expect_same_shapes(module_shapes(*vae), expected);
+
+  // A checkpoint with the legacy attention names loads after conversion.
+  TensorMap legacy;
+  for (const auto& [key, shape] : expected) {
+    std::string name = m.at("legacy_key_names").contains(key) ? m.at("legacy_key_names").at(key).get<std::string>() : key;
+    legacy[name] = torch::empty(shape, kMeta);
+  }
+  EXPECT_EQ(legacy.count("decoder.mid_block.attentions.0.query.weight"), 1u);
+  convert_legacy_vae_attention_keys(legacy);
+  Shapes converted;
+  for (const auto& [key, t] : legacy) converted[key] = t.sizes().vec();
+  expect_same_shapes(converted, expected);
+}
+
+TEST(Manifests, ClipVisionVitL14WithProjection) {
+  auto m = manifest("clip_vision_vit_l14_with_projection");
+  ClipVisionModelWithProjection clip(ClipVisionConfig::from_json(m.at("constructor_config"), "manifest"), kMeta);
+  expect_same_shapes(module_shapes(*clip), manifest_shapes(m));
+
+  TensorMap old_checkpoint{{"vision_model.embeddings.position_ids", torch::empty({1, 257}, kMeta.dtype(torch::kLong))}};
+  drop_clip_vision_position_ids(old_checkpoint);
+  EXPECT_TRUE(old_checkpoint.empty());
+}
+
+}  // namespace
+}  // namespace u3d::nn
