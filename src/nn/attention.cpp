@@ -6,10 +6,6 @@ namespace u3d::nn {
 
 namespace {
 
-// Score elements (fp32) computed per query chunk: 2^24 = 64 MB, small enough for any batch yet large
-// enough that the per-chunk matmuls stay efficient.
-constexpr int64_t kScoreBudget = int64_t{1} << 24;
-
 // [B, L, H*D] -> [B*H, L, D], contiguous.
 torch::Tensor split_heads(const torch::Tensor& x, int64_t heads) {
   const int64_t b = x.size(0), l = x.size(1), d = x.size(2) / heads;
@@ -22,22 +18,23 @@ torch::Tensor merge_heads(const torch::Tensor& x, int64_t heads) {
   return x.reshape({bh / heads, heads, l, d}).permute({0, 2, 1, 3}).reshape({bh / heads, l, heads * d});
 }
 
+// Softmax in at least fp32: half-precision scores are upcast for it.
 torch::Tensor softmax_fp32(const torch::Tensor& scores) {
-  if (scores.scalar_type() == torch::kFloat) return scores.softmax(-1);
+  if (scores.scalar_type() != torch::kHalf && scores.scalar_type() != torch::kBFloat16) return scores.softmax(-1);
   return scores.softmax(-1, torch::kFloat).to(scores.scalar_type());
 }
 
 }  // namespace
 
 torch::Tensor multi_head_attention(const torch::Tensor& q, const torch::Tensor& k, const torch::Tensor& v,
-                                   int64_t heads, double scale) {
+                                   int64_t heads, double scale, int64_t score_budget) {
   TORCH_CHECK(q.dim() == 3 && k.dim() == 3 && v.dim() == 3, "attention expects [B, L, C] inputs");
   TORCH_CHECK(q.size(2) % heads == 0, "attention: ", q.size(2), " channels do not split into ", heads, " heads");
   torch::Tensor qh = split_heads(q * scale, heads);
   torch::Tensor kt = split_heads(k, heads).transpose(1, 2);
   torch::Tensor vh = split_heads(v, heads);
   const int64_t bh = qh.size(0), lq = qh.size(1), lk = kt.size(2);
-  const int64_t chunk = std::clamp<int64_t>(kScoreBudget / std::max<int64_t>(bh * lk, 1), 1, std::max<int64_t>(lq, 1));
+  const int64_t chunk = std::clamp<int64_t>(score_budget / std::max<int64_t>(bh * lk, 1), 1, std::max<int64_t>(lq, 1));
   if (chunk >= lq) return merge_heads(torch::bmm(softmax_fp32(torch::bmm(qh, kt)), vh), heads);
 
   torch::Tensor out = torch::empty({bh, lq, vh.size(2)}, vh.options());

@@ -9,11 +9,14 @@ namespace u3d::nn {
 
 // q [B, Lq, H*D], k and v [B, Lk, H*D] -> [B, Lq, H*D]. `scale` multiplies q before the product (same
 // math as diffusers' alpha on q·kᵀ, and it never uses baddbmm, whose beta=0 path returns NaN on CPU in
-// libtorch 1.13). The softmax runs in fp32 whatever the input dtype. Queries are processed in chunks so
+// libtorch 1.13). The softmax runs in fp32 for fp16/bf16 inputs (in the input dtype otherwise). Queries are processed in chunks so
 // the score matrix of one chunk stays within a fixed budget: 4096-token self-attention never
 // materialises B·H·4096·4096 scores at once.
+// score_budget: score elements computed per chunk (about 64 MB of fp32 by default).
+constexpr int64_t kDefaultAttentionScoreBudget = int64_t{1} << 24;
 torch::Tensor multi_head_attention(const torch::Tensor& q, const torch::Tensor& k, const torch::Tensor& v,
-                                   int64_t heads, double scale);
+                                   int64_t heads, double scale,
+                                   int64_t score_budget = kDefaultAttentionScoreBudget);
 
 struct AttentionOptions {
   int64_t query_dim = 0;

@@ -225,17 +225,31 @@ UNet2DConditionModelImpl::UNet2DConditionModelImpl(const UNetConfig& c, const to
 
 torch::Tensor UNet2DConditionModelImpl::forward(const torch::Tensor& sample, const torch::Tensor& timestep,
                                                 const torch::Tensor& encoder_hidden_states, const UNetExtras& extras) {
+  if (sample.dim() != 4) throw Error("UNet: sample must be [N, C, H, W], got " + c10::str(sample.sizes()));
   const int64_t batch = sample.size(0);
   const int64_t factor = int64_t{1} << (config.block_out_channels.size() - 1);
-  if (sample.dim() != 4 || sample.size(1) != config.in_channels || sample.size(2) % factor || sample.size(3) % factor)
-    throw Error("UNet: sample must be [N, " + std::to_string(config.in_channels) + ", H, W] with H, W multiples of " +
-                std::to_string(factor) + ", got " + c10::str(sample.sizes()));
+  torch::Tensor input = sample;
+  if (extras.condition_latents.defined()) {
+    const torch::Tensor& cond = extras.condition_latents;
+    if (cond.dim() != 4 || cond.size(0) == 0 || batch % cond.size(0) != 0 ||
+        cond.size(2) != sample.size(2) || cond.size(3) != sample.size(3))
+      throw Error("UNet: condition_latents " + c10::str(cond.sizes()) + " do not fit the sample " + c10::str(sample.sizes()));
+    const int64_t b = cond.size(0), c = cond.size(1);
+    torch::Tensor repeated = cond.reshape({b, 1, c, cond.size(2), cond.size(3)})
+                                 .repeat({1, batch / b, 1, 1, 1})
+                                 .reshape({batch, c, cond.size(2), cond.size(3)});
+    input = torch::cat({sample, repeated.to(sample.scalar_type())}, 1);
+  }
+  if (input.dim() != 4 || input.size(1) != config.in_channels || input.size(2) % factor || input.size(3) % factor)
+    throw Error("UNet: the input (sample plus any condition latents) must be [N, " + std::to_string(config.in_channels) +
+                ", H, W] with H, W multiples of " + std::to_string(factor) + ", got " + c10::str(input.sizes()));
   if (encoder_hidden_states.dim() != 3 || encoder_hidden_states.size(0) != batch)
     throw Error("UNet: encoder_hidden_states must be [" + std::to_string(batch) + ", L, C], got " +
                 c10::str(encoder_hidden_states.sizes()));
   auto record = [&](const std::string& name, const torch::Tensor& value) {
     if (extras.trace) (*extras.trace)[name] = value;
   };
+  record("conv_in_input", input);
 
   torch::Tensor steps = timestep.to(sample.device());
   if (steps.dim() == 0) steps = steps.unsqueeze(0);
@@ -255,7 +269,7 @@ torch::Tensor UNet2DConditionModelImpl::forward(const torch::Tensor& sample, con
   record("time_embedding", emb);
 
   TransformerContext context{encoder_hidden_states, extras.multiview_views};
-  torch::Tensor h = conv_in->forward(sample);
+  torch::Tensor h = conv_in->forward(input);
   record("conv_in", h);
   std::vector<torch::Tensor> skips{h};
   for (size_t i = 0; i < down_blocks.size(); ++i) {

@@ -43,9 +43,12 @@ struct UNetConfig {
 struct UNetExtras {
   torch::Tensor class_labels;  // [N] int64; required iff the config has num_class_embeds
   int64_t multiview_views = 1;  // > 1: attn1 of every block attends jointly over groups of this many views
+  // Unique3D cat_condition: [B, C, H, W] latents with N a multiple of B; each is repeated for its N/B
+  // consecutive samples and concatenated after the noisy latents on channels, before conv_in.
+  torch::Tensor condition_latents;
   std::vector<torch::Tensor> down_block_additional_residuals;  // ControlNet: added to every skip
   torch::Tensor mid_block_additional_residual;                 // ControlNet: added after the mid block
-  // When set, receives intermediate tensors: time_proj, time_embedding, conv_in, down_blocks.<i>,
+  // When set, receives intermediate tensors: conv_in_input, time_proj, time_embedding, conv_in, down_blocks.<i>,
   // mid_block, up_blocks.<i> (the hidden state leaving each).
   TensorMap* trace = nullptr;
 };
@@ -89,7 +92,7 @@ class UNet2DConditionModelImpl : public torch::nn::Module {
  public:
   UNet2DConditionModelImpl(const UNetConfig& config, const torch::TensorOptions& options);
 
-  // sample [N, in_channels, H, W]; timestep 0-dim or [N] (float or integer; a 0-dim or [1] value
+  // sample [N, in_channels, H, W] ([N, in_channels - C, H, W] with condition_latents); timestep 0-dim or [N] (float or integer; a 0-dim or [1] value
   // applies to the whole batch); encoder_hidden_states [N, L, cross_attention_dim]. H and W must be
   // multiples of 2^(number of downsamplers). Returns [N, out_channels, H, W].
   torch::Tensor forward(const torch::Tensor& sample, const torch::Tensor& timestep,

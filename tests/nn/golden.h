@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <torch/torch.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <string>
 
@@ -52,7 +53,7 @@ constexpr double kForwardTolerance = 1e-4;
   do {                                                                                  \
     double _err = ::u3d::nn::test::max_abs_diff((actual), (expected));                  \
     EXPECT_LE(_err, (tol)) << #actual << " differs from the reference by " << _err;     \
-    ::testing::Test::RecordProperty("max_abs_err", std::to_string(_err));              \
+    std::printf("  [golden] %-60s max abs err %.3g\n", #expected, _err);                 \
   } while (0)
 
 }  // namespace u3d::nn::test

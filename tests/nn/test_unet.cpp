@@ -63,3 +63,26 @@ TEST(UNetConfig, RejectsUnsupportedSettings) {
 
 }  // namespace
 }  // namespace u3d::nn
+
+namespace u3d::nn {
+namespace {
+
+using namespace u3d::nn::test;
+
+// Nothing in the network is tied to fp32: built in float64 it reproduces the reference too.
+TEST(UNetDtype, Float64Forward) {
+  torch::NoGradGuard no_grad;
+  auto config = UNetConfig::from_json(golden_config("unet_base"), "unet_base/config.json");
+  UNet2DConditionModel unet(config, torch::TensorOptions().dtype(torch::kDouble));
+  load_weights_strict(*unet, golden_tensors("unet_base", "weights"));
+  EXPECT_EQ(unet->conv_in->weight.scalar_type(), torch::kDouble);
+  auto in = golden_tensors("unet_base", "inputs");
+  auto ref = golden_tensors("unet_base", "outputs");
+  torch::Tensor out = unet->forward(in["a.sample"].to(torch::kDouble), in["a.timestep"],
+                                    in["a.encoder_hidden_states"].to(torch::kDouble));
+  EXPECT_EQ(out.scalar_type(), torch::kDouble);
+  EXPECT_CLOSE_TO_GOLDEN(out, ref["a.sample_out"], kForwardTolerance);
+}
+
+}  // namespace
+}  // namespace u3d::nn

@@ -1,0 +1,66 @@
+// Full-size sd-image-variations UNet forward (860M parameters, random weights), fp32 on the CPU with
+// every core: batch 8 at 32x32 latents and batch 2 at 64x64. Reports the median of a few runs (wall time)
+// and the process CPU time of all threads.
+#include <benchmark/benchmark.h>
+#include <torch/torch.h>
+
+#include <thread>
+
+#include "nn/config_json.h"
+#include "nn/layers.h"
+#include "nn/unet.h"
+
+namespace {
+
+using namespace u3d::nn;
+
+UNet2DConditionModel& full_size_unet() {
+  static UNet2DConditionModel unet = [] {
+    auto manifest = read_json_file(std::string(UNIQUE3D_SOURCE_DIR) +
+                                   "/tests/data/nn/manifests/unet_sd_image_variations_plain.json");
+    UNet2DConditionModel m(UNetConfig::from_json(manifest.at("constructor_config"), "unet manifest"),
+                           torch::TensorOptions());
+    torch::manual_seed(0);
+    randomize_parameters(*m, 0.02);
+    return m;
+  }();
+  return unet;
+}
+
+void BM_UNetForward(benchmark::State& state) {
+  c10::InferenceMode inference;
+  const int64_t batch = state.range(0), size = state.range(1);
+  UNet2DConditionModel& unet = full_size_unet();
+  torch::manual_seed(1);
+  torch::Tensor sample = torch::randn({batch, 4, size, size});
+  torch::Tensor embedding = torch::randn({batch, 1, 768});
+  torch::Tensor timestep = torch::tensor(500.0f);
+  for (auto _ : state) {
+    torch::Tensor out = unet->forward(sample, timestep, embedding);
+    benchmark::DoNotOptimize(out.data_ptr());
+  }
+  state.counters["threads"] = at::get_num_threads();
+}
+
+BENCHMARK(BM_UNetForward)
+    ->ArgNames({"batch", "latent"})
+    ->Args({8, 32})
+    ->Args({2, 64})
+    ->Iterations(1)
+    ->Repetitions(3)
+    ->ReportAggregatesOnly(true)
+    ->Unit(benchmark::kSecond)
+    ->MeasureProcessCPUTime()  // CPU column = all threads: comparable when the machine is shared
+    ->UseRealTime();
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  at::set_num_threads(static_cast<int>(std::thread::hardware_concurrency()));
+  // Random weights can drive values into denormals, which would measure the FPU's slow path.
+  at::globalContext().setFlushDenormal(true);
+  benchmark::Initialize(&argc, argv);
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
