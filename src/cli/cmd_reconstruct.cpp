@@ -21,8 +21,24 @@ struct ReconstructArgs {
   std::string output;
   std::string normal_space = "world";
   bool preview = false;
+  bool init_only = false;
+  bool no_explicit_target = false;
+  int coarse_steps = -1;  // -1: the schedule's own
+  int refine_steps = -1;
   ReconstructOptions options;
 };
+
+// The ablation flags, folded into the stage options (--sphere-init brings the sphere schedule, which
+// an explicit --coarse-steps still overrides).
+ReconstructOptions stage_options(const ReconstructArgs& args) {
+  ReconstructOptions o = args.options;
+  if (o.sphere_init) o.coarse = CoarseStageOptions::from_sphere();
+  if (args.coarse_steps >= 0) o.coarse.steps = args.coarse_steps;
+  if (args.refine_steps >= 0) o.refine.steps = args.refine_steps;
+  o.refine.use_explicit_target = !args.no_explicit_target;
+  o.run_coarse = o.run_refine = !args.init_only;
+  return o;
+}
 
 std::string lower_extension(const std::filesystem::path& p) {
   std::string ext = p.extension().string();
@@ -46,7 +62,7 @@ void run(const ReconstructArgs& args) {
   const ViewSet views = load_view_set(args.views_dir, parse_normal_space(args.normal_space));
   const double load_seconds = load_timer.finish();
 
-  ReconstructResult result = reconstruct(views, args.options);
+  ReconstructResult result = reconstruct(views, stage_options(args));
 
   // Quality report against the input, in the views' frame (before any output scale).
   Mesh in_view_frame = result.mesh;
@@ -104,6 +120,22 @@ const CommandRegistration registration{
       sub.add_option("--init-faces", o.init.target_faces, "Face count of the initial mesh")
           ->capture_default_str()
           ->check(CLI::Range(100, 10000000));
+      CLI::Option* init_only = sub.add_flag(
+          "--init-only", args->init_only, "Ablation: skip both optimisation stages (initial mesh -> clean-up -> colouring)");
+      sub.add_flag("--no-explicit-target", args->no_explicit_target,
+                   "Ablation: refine with the plain multi-view normal loss instead of ExplicitTarget normals")
+          ->excludes(init_only);
+      sub.add_flag("--sphere-init", o.sphere_init,
+                   "Start the coarse stage from a sphere (official sphere schedule) instead of the initial mesh")
+          ->excludes(init_only);
+      sub.add_option("--coarse-steps", args->coarse_steps,
+                     "Steps of the coarse stage (default: " + std::to_string(CoarseStageOptions{}.steps) + ")")
+          ->check(CLI::Range(0, 100000))
+          ->excludes(init_only);
+      sub.add_option("--refine-steps", args->refine_steps,
+                     "Steps of the refinement stage (default: " + std::to_string(RefineStageOptions{}.steps) + ")")
+          ->check(CLI::Range(0, 100000))
+          ->excludes(init_only);
       sub.add_option("--poisson-depth", o.init.poisson_depth, "Screened Poisson octree depth")
           ->capture_default_str()
           ->check(CLI::Range(4, 12));

@@ -44,7 +44,7 @@ Image eroded_mask_copy(const Image& rgba, int radius) {
 }  // namespace
 
 std::vector<uint8_t> visible_vertices(const Mesh& mesh, const std::vector<Vec3f>& face_normals, View v,
-                                      const ExplicitTargetOptions& options) {
+                                      const ColourTargetOptions& options) {
   const Camera cam = view_camera(v, options.raster_resolution);
   const RasterBuffer buf = rasterize(mesh, cam);
   std::vector<uint8_t> face_seen(mesh.faces.size(), 0);
@@ -59,7 +59,7 @@ std::vector<uint8_t> visible_vertices(const Mesh& mesh, const std::vector<Vec3f>
 }
 
 ExplicitTarget compute_explicit_target(const Mesh& mesh, const std::array<const Image*, 4>& images,
-                                       const ExplicitTargetOptions& options) {
+                                       const ColourTargetOptions& options) {
   require(options.raster_resolution >= 16, "ExplicitTarget: raster resolution must be at least 16");
   require(options.cos_power >= 0, "ExplicitTarget: cos power must not be negative");
   const size_t n = mesh.positions.size();

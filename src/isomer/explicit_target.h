@@ -1,7 +1,7 @@
 #pragma once
 // ExplicitTarget (paper Sec. 3.2 and appendix): one target value per vertex, the weighted mean of
-// what the views that see the vertex say about it. Used for colouring (values = RGB images) and,
-// by the refinement stage, for normals (values = normal maps).
+// what the views that see the vertex say about it, here for colouring (values = RGB images). The
+// refinement stage's variant for normals is explicit_target_normals.h (ExplicitTargetOptions).
 //
 // For view i and vertex v (official `multiview_color_projection`, docs/official_reference.md 4.2):
 //   - visibility: v belongs to a face that owns at least one pixel of the view's rasterization and
@@ -21,7 +21,9 @@
 
 namespace u3d {
 
-struct ExplicitTargetOptions {
+// Named apart from explicit_target_normals.h's ExplicitTargetOptions: one name for two structs would
+// break the one-definition rule inside u3d_isomer.
+struct ColourTargetOptions {
   std::array<float, 4> view_weights{2.0f, 0.2f, 1.0f, 0.2f};  // front, right, back, left (official colouring)
   int cos_power = 2;
   float facing_epsilon = 0.05f;
@@ -37,15 +39,15 @@ struct ExplicitTarget {
 
 // Vertices of `mesh` visible in view v by the rule above (nonzero = visible).
 std::vector<uint8_t> visible_vertices(const Mesh& mesh, const std::vector<Vec3f>& face_normals, View v,
-                                      const ExplicitTargetOptions& options);
+                                      const ColourTargetOptions& options);
 
 // images[i]: RGBA view images (any square resolution), indexed by int(View).
 ExplicitTarget compute_explicit_target(const Mesh& mesh, const std::array<const Image*, 4>& images,
-                                       const ExplicitTargetOptions& options = {});
+                                       const ColourTargetOptions& options = {});
 
 // Final colouring (official: threshold 0.2, "smooth" below it, then completion of the rest).
 struct ColouringOptions {
-  ExplicitTargetOptions target;
+  ColourTargetOptions target;
   float confidence_threshold = 0.2f;  // vertices with less total weight are filled by completion
   int mask_erosion_px = 1;            // official erodes the colour masks by 1 px (3x3)
   Vec3f fallback_colour{0.5f, 0.5f, 0.5f};  // only for parts no colour can reach

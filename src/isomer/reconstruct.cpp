@@ -2,11 +2,52 @@
 
 #include "core/error.h"
 #include "core/progress.h"
+#include "isomer/view_resolution.h"
 
 namespace u3d {
+namespace {
+
+StageMesh to_stage_mesh(const Mesh& mesh) { return {mesh.positions, mesh.faces}; }
+
+// Only geometry survives an optimisation stage; colours come later from the views.
+Mesh from_stage_mesh(StageMesh stage) {
+  Mesh mesh;
+  mesh.positions = std::move(stage.positions);
+  mesh.faces = std::move(stage.faces);
+  return mesh;
+}
+
+}  // namespace
+
+StageViews stage_views(const ViewSet& views) {
+  StageViews out;
+  for (View v : kAllViews) {
+    const Image& decoded = views[v].normals;
+    Image encoded(decoded.width, decoded.height, 4);
+    for (size_t p = 0; p < decoded.pixel_count(); ++p) {
+      const float* in = decoded.data.data() + p * 4;
+      float* px = encoded.data.data() + p * 4;
+      for (int c = 0; c < 3; ++c) px[c] = 0.5f * (in[c] + 1.f);
+      px[3] = in[3];
+    }
+    out.normal_maps.push_back(std::move(encoded));
+    out.cameras.push_back(view_camera(v, decoded.width));
+  }
+  return out;
+}
 
 Mesh stage_initial_mesh(const ViewSet& views, const ReconstructOptions& options) {
+  if (options.sphere_init) return from_stage_mesh(sphere_initial_mesh());
   return build_initial_mesh(views, options.init);
+}
+
+Mesh stage_coarse(const Mesh& mesh, const StageViews& views, const ReconstructOptions& options) {
+  const ViewsAtResolution coarse = views_at_resolution(views.normal_maps, views.cameras, kCoarseMapResolution);
+  return from_stage_mesh(run_coarse_stage(to_stage_mesh(mesh), coarse.normal_maps, coarse.cameras, options.coarse));
+}
+
+Mesh stage_refine(const Mesh& mesh, const StageViews& views, const ReconstructOptions& options) {
+  return from_stage_mesh(run_refine_stage(to_stage_mesh(mesh), views.normal_maps, views.cameras, options.refine));
 }
 
 Mesh stage_smooth_and_subdivide(const Mesh& mesh, const ReconstructOptions& options) {
@@ -30,7 +71,12 @@ ReconstructResult reconstruct(const ViewSet& views, const ReconstructOptions& op
     result.timings.push_back({name, timer.finish()});
   };
   Mesh mesh;
-  timed("initial mesh", [&] { mesh = stage_initial_mesh(views, options); });
+  timed(options.sphere_init ? "sphere" : "initial mesh", [&] { mesh = stage_initial_mesh(views, options); });
+  if (options.run_coarse || options.run_refine) {
+    const StageViews maps = stage_views(views);
+    if (options.run_coarse) timed("coarse", [&] { mesh = stage_coarse(mesh, maps, options); });
+    if (options.run_refine) timed("refine", [&] { mesh = stage_refine(mesh, maps, options); });
+  }
   timed("smooth and subdivide", [&] { mesh = stage_smooth_and_subdivide(mesh, options); });
   timed("colouring", [&] { result.colouring = stage_colouring(mesh, views, options); });
   stage_output_transform(mesh, options);

@@ -44,6 +44,18 @@ double mean_edge_length(const open3d::geometry::TriangleMesh& mesh) {
   return count ? total / double(count) : 0.0;
 }
 
+// Removes connected pieces with fewer than min_faces faces, never the largest piece.
+void drop_crumbs(open3d::geometry::TriangleMesh& mesh, int min_faces) {
+  auto [cluster, cluster_faces, cluster_area] = mesh.ClusterConnectedTriangles();
+  if (cluster_faces.empty()) return;
+  const size_t largest = size_t(std::max_element(cluster_faces.begin(), cluster_faces.end()) - cluster_faces.begin());
+  std::vector<bool> drop(mesh.triangles_.size(), false);
+  for (size_t f = 0; f < drop.size(); ++f)
+    drop[f] = size_t(cluster[f]) != largest && cluster_faces[cluster[f]] < size_t(std::max(min_faces, 0));
+  mesh.RemoveTrianglesByMask(drop);
+  mesh.RemoveUnreferencedVertices();
+}
+
 }  // namespace
 
 Mesh smooth_and_subdivide(const Mesh& input, const SurfaceCleanupOptions& options) {
@@ -56,6 +68,7 @@ Mesh smooth_and_subdivide(const Mesh& input, const SurfaceCleanupOptions& option
   // Loop subdivision needs a manifold (pymeshlab repairs non-manifold vertices and edges here too).
   repair_to_closed_manifold(smoothed);
   auto mesh = to_open3d(smoothed);
+  drop_crumbs(*mesh, options.min_component_faces);
   const BoundingBox box = bounding_box(smoothed.positions);
   const double threshold = options.subdivision_threshold * double(box.extent().norm());
   for (int it = 0; it < options.subdivision_iterations && mean_edge_length(*mesh) > threshold; ++it)

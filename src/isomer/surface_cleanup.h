@@ -14,6 +14,9 @@ struct SurfaceCleanupOptions {
   int smooth_iterations = 1;              // official: 1 step
   int subdivision_iterations = 2;         // official: 2
   float subdivision_threshold = 0.0025f;  // fraction of the bounding-box diagonal (official 0.25 %)
+  // Pieces with fewer faces are crumbs that remeshing and repair can leave (a 2-face "pillow", a
+  // 6-face bipyramid): too small for any view to colour, and Loop subdivision turns them non-manifold.
+  int min_component_faces = 20;
 };
 
 // Uniform Laplacian step as pymeshlab's: each vertex moves to the mean of itself and its neighbours.

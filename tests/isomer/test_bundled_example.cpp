@@ -1,10 +1,10 @@
 // The bundled example (examples/spot/views, rendered by `unique3d render` from examples/spot/spot.obj)
-// reconstructs to a closed, manifold, fully coloured mesh that covers the input silhouettes.
+// reconstructs to a closed, manifold, fully coloured mesh whose four views overlap the input masks
+// with IoU >= 0.9 (the initial mesh alone reaches only ~0.87 front/back and ~0.71 on the sides: the
+// coarse stage is what moves the silhouettes onto the masks).
 //
-// The IoU floors below are what the stages implemented so far (initial mesh, clean-up, colouring)
-// reach; the side views are the weak ones because front/back integration cannot see depth steps
-// (the head in front of the body). The optimisation stages that go between the initial mesh and the
-// clean-up are what brings every view to >= 0.9.
+// The optimisation stages run shortened here (coarse 100 of 200 steps, refinement 20 of 100, one
+// subdivision) to keep the test near half a minute; the CLI test runs the full default once.
 #include <gtest/gtest.h>
 
 #include "core/progress.h"
@@ -18,7 +18,11 @@ namespace {
 TEST(BundledExample, SpotReconstructsClosedColouredAndOnTheSilhouettes) {
   set_progress_quiet(true);
   const ViewSet views = load_view_set(std::filesystem::path(UNIQUE3D_SOURCE_DIR) / "examples/spot/views");
-  const ReconstructResult result = reconstruct(views);
+  ReconstructOptions options;
+  options.coarse.steps = 100;
+  options.refine.steps = 20;
+  options.cleanup.subdivision_iterations = 1;
+  const ReconstructResult result = reconstruct(views, options);
   const Mesh& mesh = result.mesh;
   const MeshTopology topo = mesh_topology(mesh);
   EXPECT_TRUE(topo.closed_manifold()) << topo.summary();
@@ -30,10 +34,24 @@ TEST(BundledExample, SpotReconstructsClosedColouredAndOnTheSilhouettes) {
   std::printf("spot: %zu faces, %s\nspot silhouette IoU: front %.4f right %.4f back %.4f left %.4f\n",
               mesh.face_count(), topo.summary().c_str(), iou[0], iou[1], iou[2], iou[3]);
   for (const StageTiming& t : result.timings) std::printf("spot stage %s: %.2f s\n", t.name.c_str(), t.seconds);
-  EXPECT_GE(iou[0], 0.85f);
-  EXPECT_GE(iou[2], 0.85f);
-  EXPECT_GE(iou[1], 0.65f);
-  EXPECT_GE(iou[3], 0.65f);
+  for (float v : iou) EXPECT_GE(v, 0.9f);
+  const std::vector<std::string> stages = {"initial mesh", "coarse", "refine", "smooth and subdivide", "colouring"};
+  ASSERT_EQ(result.timings.size(), stages.size());
+  for (size_t i = 0; i < stages.size(); ++i) EXPECT_EQ(result.timings[i].name, stages[i]);
+}
+
+TEST(BundledExample, ReconstructionIsDeterministic) {
+  set_progress_quiet(true);
+  const ViewSet views = load_view_set(std::filesystem::path(UNIQUE3D_SOURCE_DIR) / "examples/spot/views");
+  ReconstructOptions options;
+  options.coarse.steps = 30;
+  options.refine.steps = 5;
+  options.cleanup.subdivision_iterations = 0;
+  const Mesh a = reconstruct(views, options).mesh;
+  const Mesh b = reconstruct(views, options).mesh;
+  ASSERT_EQ(a.faces, b.faces);
+  ASSERT_EQ(a.positions, b.positions);
+  EXPECT_EQ(a.colors, b.colors);
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 // silhouettes; every bad input gives a clear message, a non-zero exit and no output file.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cstdlib>
 #include <fstream>
 #include <regex>
@@ -34,7 +35,8 @@ TEST(ReconstructCli, SphereGivesClosedColouredMeshMatchingTheSilhouettes) {
   const auto dir = testing::fresh_temp_dir("cli_sphere");
   testing::write_view_set(testing::sphere_views(0.6f, 192), dir / "views");
   const auto out = dir / "sphere.glb";
-  const CliResult r = run_cli((dir / "views").string() + " -o " + out.string() + " --preview --visibility-resolution 512",
+  const CliResult r = run_cli((dir / "views").string() + " -o " + out.string() + " --preview --visibility-resolution 512"
+                              " --coarse-steps 60 --refine-steps 20",  // shortened: the spot test runs the full default
                               dir / "log.txt");
   ASSERT_EQ(r.status, 0) << r.output;
   ASSERT_TRUE(std::filesystem::exists(out));
@@ -49,6 +51,56 @@ TEST(ReconstructCli, SphereGivesClosedColouredMeshMatchingTheSilhouettes) {
       << r.output;
   for (int k = 1; k <= 4; ++k) EXPECT_GE(std::stod(m[k]), 0.95) << r.output;
   std::printf("%s", r.output.substr(r.output.find("\nmesh:") + 1).c_str());
+}
+
+std::array<double, 4> printed_iou(const std::string& output) {
+  std::smatch m;
+  std::array<double, 4> iou{-1, -1, -1, -1};
+  if (std::regex_search(output, m,
+                        std::regex("silhouette IoU: front ([0-9.]+), right ([0-9.]+), back ([0-9.]+), left ([0-9.]+)")))
+    for (int k = 0; k < 4; ++k) iou[k] = std::stod(m[k + 1]);
+  return iou;
+}
+
+// The full default pipeline (initial mesh, coarse, ExplicitTarget refinement, clean-up, colouring)
+// once, on the bundled example: about a minute.
+TEST(ReconstructCli, BundledExampleFullPipelineCoversTheMasks) {
+  const auto dir = testing::fresh_temp_dir("cli_spot");
+  const auto out = dir / "spot.glb";
+  const CliResult r = run_cli((std::filesystem::path(UNIQUE3D_SOURCE_DIR) / "examples/spot/views").string() + " -o " +
+                                  out.string(),
+                              dir / "log.txt");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const Mesh mesh = read_mesh(out);
+  EXPECT_TRUE(mesh.has_colors());
+  EXPECT_TRUE(mesh_topology(mesh).closed_manifold()) << mesh_topology(mesh).summary();
+  for (const char* stage : {"initial mesh ", "coarse ", "refine ", "smooth and subdivide ", "colouring "})
+    EXPECT_NE(r.output.find(std::string(", ") + stage), std::string::npos) << stage << r.output;
+  EXPECT_NE(r.output.find(", 0 unreachable"), std::string::npos) << r.output;
+  for (double v : printed_iou(r.output)) EXPECT_GE(v, 0.9) << r.output;
+  std::printf("%s", r.output.substr(r.output.find("\nmesh:") + 1).c_str());
+}
+
+// The ablations the object benchmark runs exist and change which stages run.
+TEST(ReconstructCli, AblationFlagsSelectTheStages) {
+  const auto dir = testing::fresh_temp_dir("cli_ablation");
+  testing::write_view_set(testing::sphere_views(0.6f, 96), dir / "views");
+  const std::string views = (dir / "views").string();
+  const CliResult init = run_cli(views + " -o " + (dir / "init.ply").string() + " --init-only", dir / "init.txt");
+  ASSERT_EQ(init.status, 0) << init.output;
+  EXPECT_EQ(init.output.find(", coarse "), std::string::npos) << init.output;
+  EXPECT_EQ(init.output.find(", refine "), std::string::npos) << init.output;
+  const CliResult plain = run_cli(views + " -o " + (dir / "plain.ply").string() +
+                                      " --no-explicit-target --sphere-init --coarse-steps 20 --refine-steps 5",
+                                  dir / "plain.txt");
+  ASSERT_EQ(plain.status, 0) << plain.output;
+  EXPECT_NE(plain.output.find("time: load"), std::string::npos) << plain.output;
+  EXPECT_NE(plain.output.find(", sphere "), std::string::npos) << plain.output;
+  EXPECT_NE(plain.output.find(", refine "), std::string::npos) << plain.output;
+  const CliResult clash = run_cli(views + " -o " + (dir / "x.ply").string() + " --init-only --refine-steps 5",
+                                  dir / "clash.txt");
+  EXPECT_NE(clash.status, 0) << clash.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.ply"));
 }
 
 TEST(ReconstructCli, BadInputFailsCleanlyAndWritesNothing) {

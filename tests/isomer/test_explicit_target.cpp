@@ -37,7 +37,7 @@ TEST(ExplicitTarget, WeightsMatchHandComputedCase) {
   ASSERT_NEAR(face_normals(mesh.positions, mesh.faces)[0].dot(Vec3f(std::sin(angle), 0, std::cos(angle))), 1.f, 1e-5f);
   const Image front = constant_rgba(64, {1, 0, 0}, 1.f), right = constant_rgba(64, {0, 1, 0}, 0.5f);
   const Image back = constant_rgba(64, {0, 0, 1}, 1.f), left = constant_rgba(64, {0, 0, 1}, 1.f);
-  ExplicitTargetOptions options;
+  ColourTargetOptions options;
   options.raster_resolution = 64;
   const ExplicitTarget t = compute_explicit_target(mesh, {&front, &right, &back, &left}, options);
   // front: 2.0 * 0.75 * 1 = 1.5; right: 0.2 * 0.25 * 0.5 = 0.025; back and left: not visible.
@@ -58,7 +58,7 @@ TEST(ExplicitTarget, WeightsMatchHandComputedCase) {
 TEST(ExplicitTarget, FacesTurnedAwayAreNotVisible) {
   const Mesh mesh = tilted_square(float(M_PI) / 6.f);
   const std::vector<Vec3f> fn = face_normals(mesh.positions, mesh.faces);
-  ExplicitTargetOptions options;
+  ColourTargetOptions options;
   options.raster_resolution = 64;
   EXPECT_EQ(visible_vertices(mesh, fn, View::Front, options), std::vector<uint8_t>(4, 1));
   EXPECT_EQ(visible_vertices(mesh, fn, View::Back, options), std::vector<uint8_t>(4, 0));
