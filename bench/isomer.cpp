@@ -59,6 +59,11 @@ void run_one(int resolution) {
   std::printf(" total %.2f s | %zu faces, %s | IoU %.3f %.3f %.3f %.3f | peak RSS %.0f MiB\n", total,
               result.mesh.face_count(), mesh_topology(result.mesh).summary().c_str(), iou[0], iou[1], iou[2], iou[3],
               double(usage.ru_maxrss) / 1024.0);
+  for (const auto& [name, report] : {std::pair{"coarse", &result.coarse}, std::pair{"refine", &result.refine}}) {
+    const StageProfile& p = report->profile;
+    std::printf("         %s profile: render %.2f s, losses %.2f s, backward %.2f s, step %.2f s, remesh %.2f s\n",
+                name, p.render, p.losses, p.backward, p.step, p.remesh);
+  }
   std::fflush(stdout);
 }
 

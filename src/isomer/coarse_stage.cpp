@@ -4,7 +4,7 @@
 #include "core/progress.h"
 #include "isomer/icosphere.h"
 #include "isomer/mesh_optimizer.h"
-#include "isomer/normal_renderer.h"
+#include "isomer/optimisation_loop.h"
 #include "isomer/reconstruction_losses.h"
 #include "isomer/view_resolution.h"
 
@@ -48,29 +48,16 @@ StageMesh run_coarse_stage(const StageMesh& initial, const std::vector<Image>& i
   opt.seed = options.seed;
   MeshOptimizer optimizer(initial.positions, initial.faces, opt);
   NormalRenderer renderer(cameras);
-  std::vector<Vec3f> grad;
-  double loss = 0.0;
-  for (int step = 0; step < options.steps; ++step) {
-    optimizer.set_learning_rate(optimizer.learning_rate() * options.lr_decay);
-    const std::vector<Vec3f>& positions = optimizer.positions();
-    const std::vector<Vec3i>& faces = optimizer.faces();
-    const VertexNormals normals = compute_vertex_normals(positions, faces);
-    renderer.render(positions, faces, normals.unit);
-    grad.assign(positions.size(), Vec3f::Zero());
-    loss = masked_image_l2(renderer, references, 4, 1.f);
+  auto losses = [&](int, const std::vector<Vec3f>& positions, const std::vector<Vec3i>&,
+                    const VertexNormals& normals, std::vector<Vec3f>& grad) {
+    double loss = masked_image_l2(renderer, references, 4, 1.f);
     loss += background_alpha_l2(renderer, targets, 1.f);
     loss += expansion_loss(normals.unit, options.expansion_weight, grad);
     loss += out_of_box_loss(positions, options.out_of_box_limit, options.out_of_box_weight, grad);
-    renderer.backward(positions, faces, normals, grad);
-    optimizer.step(grad);
-    optimizer.remesh();
-  }
-  if (report) {
-    report->steps = options.steps;
-    report->seconds = timer.finish();
-    report->final_loss = loss;
-    report->final_edge_length = optimizer.mean_reference_edge_length();
-  }
+    return loss;
+  };
+  run_optimisation_loop(optimizer, renderer, options.steps, options.lr_decay, losses, report);
+  if (report) report->seconds = timer.finish();
   return {optimizer.positions(), optimizer.faces()};
 }
 

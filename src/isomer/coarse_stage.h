@@ -8,6 +8,7 @@
 #include "core/camera.h"
 #include "core/image.h"
 #include "core/mesh.h"
+#include "isomer/stage_report.h"
 
 namespace u3d {
 
@@ -29,13 +30,6 @@ struct CoarseStageOptions {
   // Schedules of the official pipeline: starting from the fast initial mesh ("std"), or from a sphere.
   static CoarseStageOptions from_initial_mesh() { return {}; }
   static CoarseStageOptions from_sphere();
-};
-
-struct StageReport {
-  int steps = 0;
-  double seconds = 0.0;
-  double final_loss = 0.0;
-  float final_edge_length = 0.f;
 };
 
 struct StageMesh {

@@ -29,7 +29,7 @@ std::vector<float> normal_color_attributes(const std::vector<Vec3f>& unit_vector
 NormalRenderer::NormalRenderer(std::vector<Camera> cameras) {
   views_.resize(cameras.size());
   for (size_t i = 0; i < cameras.size(); ++i) {
-    RenderedView& v = views_[i];
+    DifferentiableView& v = views_[i];
     v.camera = cameras[i];
     const int w = v.camera.width, h = v.camera.height;
     v.color = Image(w, h, kChannels);
@@ -47,12 +47,12 @@ void NormalRenderer::render(const std::vector<Vec3f>& positions, const std::vect
   neighbors_ = edge_neighbors(faces);
 #pragma omp parallel for schedule(dynamic, 1) if (views_.size() > 1)
   for (size_t i = 0; i < views_.size(); ++i) {
-    RenderedView& v = views_[i];
+    DifferentiableView& v = views_[i];
     // Forget the previous frame's footprint.
     zero_pixels(v.color, v.active);
     zero_pixels(v.image, v.active);
     zero_pixels(v.grad_image, v.active);
-    v.raster = rasterize(positions, faces, v.camera);
+    v.raster = rasterize(positions, faces, v.camera, RasterOptions{.cull_backfaces = true});
     v.projection = project_to_screen(positions, v.camera);
     v.covered = covered_pixels(v.raster);
     interpolate(v.raster, v.covered, faces, attributes_.data(), kChannels, v.color);
@@ -75,7 +75,7 @@ void NormalRenderer::render(const std::vector<Vec3f>& positions, const std::vect
 
 void NormalRenderer::render_attribute(const std::vector<Vec3i>& faces, const std::vector<Vec3f>& unit_vectors,
                                       size_t view_index, Image& out) const {
-  const RenderedView& v = views_[view_index];
+  const DifferentiableView& v = views_[view_index];
   const std::vector<float> attributes = normal_color_attributes(unit_vectors);
   Image color(v.raster.width, v.raster.height, kChannels);
   interpolate(v.raster, v.covered, faces, attributes.data(), kChannels, color);
@@ -88,7 +88,7 @@ void NormalRenderer::backward(const std::vector<Vec3f>& positions, const std::ve
   const size_t n = positions.size();
 #pragma omp parallel for schedule(dynamic, 1) if (views_.size() > 1)
   for (size_t i = 0; i < views_.size(); ++i) {
-    RenderedView& v = views_[i];
+    DifferentiableView& v = views_[i];
     // Identity part of the anti-aliasing backward, then its blend and edge parts.
     for (int32_t p : v.covered)
       std::copy_n(v.grad_image.data.data() + size_t(p) * kChannels, kChannels,
@@ -104,7 +104,7 @@ void NormalRenderer::backward(const std::vector<Vec3f>& positions, const std::ve
   }
   // Colour = (n + 1) / 2: the colour gradient reaches the unit normals halved.
   std::vector<Vec3f> grad_normals(n, Vec3f::Zero());
-  for (const RenderedView& v : views_) {
+  for (const DifferentiableView& v : views_) {
     for (size_t p = 0; p < n; ++p) {
       grad_positions[p] += v.grad_positions[p];
       for (int c = 0; c < 3; ++c) grad_normals[p][c] += 0.5f * v.grad_attributes[p * kChannels + c];

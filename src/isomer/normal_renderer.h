@@ -4,6 +4,10 @@
 // backward pass sends image-space gradients to vertex positions along all three official paths:
 // through the vertex normals, through the barycentrics, and through the silhouette edges.
 //
+// Back faces are culled: the surface is closed and oriented outward, so a back face is always hidden
+// behind a front face and culling changes no pixel; it halves the rasterizer's work. (Where a fold
+// makes the surface cross itself the visible side differs, but such faces carry no valid normal.)
+//
 // Only the object's footprint is touched: covered pixels plus the background pixels anti-aliasing
 // blends into ("active" pixels). Everywhere else the image is zero and stays zero between frames.
 #include <cstdint>
@@ -18,7 +22,7 @@
 
 namespace u3d {
 
-struct RenderedView {
+struct DifferentiableView {
   Camera camera;
   RasterBuffer raster;
   ScreenProjection projection;
@@ -42,8 +46,8 @@ class NormalRenderer {
   explicit NormalRenderer(std::vector<Camera> cameras);
 
   size_t view_count() const { return views_.size(); }
-  const RenderedView& view(size_t i) const { return views_[i]; }
-  RenderedView& view(size_t i) { return views_[i]; }
+  const DifferentiableView& view(size_t i) const { return views_[i]; }
+  DifferentiableView& view(size_t i) { return views_[i]; }
 
   // Renders all views of the mesh with these unit vertex normals; clears each view's grad_image on its
   // new active pixels.
@@ -60,7 +64,7 @@ class NormalRenderer {
                 std::vector<Vec3f>& grad_positions);
 
  private:
-  std::vector<RenderedView> views_;
+  std::vector<DifferentiableView> views_;
   std::vector<float> attributes_;  // per vertex ((n + 1) / 2, 1)
   EdgeNeighbors neighbors_;
 };

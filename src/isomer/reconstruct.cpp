@@ -41,13 +41,17 @@ Mesh stage_initial_mesh(const ViewSet& views, const ReconstructOptions& options)
   return build_initial_mesh(views, options.init);
 }
 
-Mesh stage_coarse(const Mesh& mesh, const StageViews& views, const ReconstructOptions& options) {
+Mesh stage_coarse(const Mesh& mesh, const StageViews& views, const ReconstructOptions& options,
+                  StageReport* report) {
   const ViewsAtResolution coarse = views_at_resolution(views.normal_maps, views.cameras, kCoarseMapResolution);
-  return from_stage_mesh(run_coarse_stage(to_stage_mesh(mesh), coarse.normal_maps, coarse.cameras, options.coarse));
+  return from_stage_mesh(
+      run_coarse_stage(to_stage_mesh(mesh), coarse.normal_maps, coarse.cameras, options.coarse, report));
 }
 
-Mesh stage_refine(const Mesh& mesh, const StageViews& views, const ReconstructOptions& options) {
-  return from_stage_mesh(run_refine_stage(to_stage_mesh(mesh), views.normal_maps, views.cameras, options.refine));
+Mesh stage_refine(const Mesh& mesh, const StageViews& views, const ReconstructOptions& options,
+                  StageReport* report) {
+  return from_stage_mesh(
+      run_refine_stage(to_stage_mesh(mesh), views.normal_maps, views.cameras, options.refine, report));
 }
 
 Mesh stage_smooth_and_subdivide(const Mesh& mesh, const ReconstructOptions& options) {
@@ -74,8 +78,8 @@ ReconstructResult reconstruct(const ViewSet& views, const ReconstructOptions& op
   timed(options.sphere_init ? "sphere" : "initial mesh", [&] { mesh = stage_initial_mesh(views, options); });
   if (options.run_coarse || options.run_refine) {
     const StageViews maps = stage_views(views);
-    if (options.run_coarse) timed("coarse", [&] { mesh = stage_coarse(mesh, maps, options); });
-    if (options.run_refine) timed("refine", [&] { mesh = stage_refine(mesh, maps, options); });
+    if (options.run_coarse) timed("coarse", [&] { mesh = stage_coarse(mesh, maps, options, &result.coarse); });
+    if (options.run_refine) timed("refine", [&] { mesh = stage_refine(mesh, maps, options, &result.refine); });
   }
   timed("smooth and subdivide", [&] { mesh = stage_smooth_and_subdivide(mesh, options); });
   timed("colouring", [&] { result.colouring = stage_colouring(mesh, views, options); });

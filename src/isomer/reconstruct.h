@@ -48,6 +48,7 @@ struct StageTiming {
 struct ReconstructResult {
   Mesh mesh;
   std::vector<StageTiming> timings;
+  StageReport coarse, refine;  // the optimisation stages' loss and time profile (when they ran)
   ColouringReport colouring;
 };
 
@@ -61,8 +62,10 @@ StageViews stage_views(const ViewSet& views);
 
 // The stages, in pipeline order.
 Mesh stage_initial_mesh(const ViewSet& views, const ReconstructOptions& options);
-Mesh stage_coarse(const Mesh& mesh, const StageViews& views, const ReconstructOptions& options);
-Mesh stage_refine(const Mesh& mesh, const StageViews& views, const ReconstructOptions& options);
+Mesh stage_coarse(const Mesh& mesh, const StageViews& views, const ReconstructOptions& options,
+                  StageReport* report = nullptr);
+Mesh stage_refine(const Mesh& mesh, const StageViews& views, const ReconstructOptions& options,
+                  StageReport* report = nullptr);
 Mesh stage_smooth_and_subdivide(const Mesh& mesh, const ReconstructOptions& options);
 ColouringReport stage_colouring(Mesh& mesh, const ViewSet& views, const ReconstructOptions& options);
 void stage_output_transform(Mesh& mesh, const ReconstructOptions& options);

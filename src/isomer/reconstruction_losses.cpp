@@ -30,14 +30,14 @@ double masked_image_l2(NormalRenderer& renderer, const std::vector<const Image*>
   require(references.size() == renderer.view_count(), "one reference image per view");
   size_t count = 0;
   for (size_t i = 0; i < renderer.view_count(); ++i) {
-    const RenderedView& v = renderer.view(i);
+    const DifferentiableView& v = renderer.view(i);
     for (int32_t p : v.active) count += v.image.data[size_t(p) * 4 + 3] > 0.5f;
   }
   if (count == 0) return 0.0;
   const float scale = weight / float(count * channels);
   double total = 0.0;
   for (size_t i = 0; i < renderer.view_count(); ++i) {
-    RenderedView& v = renderer.view(i);
+    DifferentiableView& v = renderer.view(i);
     const Image& ref = *references[i];
     require(ref.width == v.image.width && ref.height == v.image.height && ref.channels == 4,
             "reference image must match the view resolution and be RGBA");
@@ -64,7 +64,7 @@ double background_alpha_l2(NormalRenderer& renderer, const std::vector<NormalTar
   const float scale = weight / float(count);
   double total = 0.0;
   for (size_t i = 0; i < renderer.view_count(); ++i) {
-    RenderedView& v = renderer.view(i);
+    DifferentiableView& v = renderer.view(i);
     const NormalTarget& t = targets[i];
     // Off the rendered footprint the alpha is 0: those pixels add the constant target alpha^2.
     total += t.background_alpha_sq;

@@ -3,7 +3,7 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "isomer/mesh_optimizer.h"
-#include "isomer/normal_renderer.h"
+#include "isomer/optimisation_loop.h"
 #include "isomer/reconstruction_losses.h"
 #include "isomer/view_resolution.h"
 
@@ -41,14 +41,8 @@ StageMesh run_refine_stage(const StageMesh& coarse, const std::vector<Image>& in
   } else {
     for (const NormalTarget& t : targets) references.push_back(&t.rgba);
   }
-  std::vector<Vec3f> grad;
-  double loss = 0.0;
-  for (int step = 0; step < options.steps; ++step) {
-    optimizer.set_learning_rate(optimizer.learning_rate() * options.lr_decay);
-    const std::vector<Vec3f>& positions = optimizer.positions();
-    const std::vector<Vec3i>& faces = optimizer.faces();
-    const VertexNormals normals = compute_vertex_normals(positions, faces);
-    renderer.render(positions, faces, normals.unit);
+  auto losses = [&](int step, const std::vector<Vec3f>& positions, const std::vector<Vec3i>& faces,
+                    const VertexNormals& normals, std::vector<Vec3f>& grad) {
     if (options.use_explicit_target &&
         (step < options.update_warmup || step % std::max(options.update_interval, 1) == 0)) {
       std::vector<const RasterBuffer*> rasters;
@@ -58,20 +52,13 @@ StageMesh run_refine_stage(const StageMesh& coarse, const std::vector<Image>& in
       // The targets are rendered once here and then held fixed while the mesh moves.
       for (size_t i = 0; i < cameras.size(); ++i) renderer.render_attribute(faces, et, i, target_images[i]);
     }
-    grad.assign(positions.size(), Vec3f::Zero());
-    loss = masked_image_l2(renderer, references, 3, 1.f);
+    double loss = masked_image_l2(renderer, references, 3, 1.f);
     loss += background_alpha_l2(renderer, targets, 1.f);
     loss += out_of_box_loss(positions, options.out_of_box_limit, options.out_of_box_weight, grad);
-    renderer.backward(positions, faces, normals, grad);
-    optimizer.step(grad);
-    optimizer.remesh();
-  }
-  if (report) {
-    report->steps = options.steps;
-    report->seconds = timer.finish();
-    report->final_loss = loss;
-    report->final_edge_length = optimizer.mean_reference_edge_length();
-  }
+    return loss;
+  };
+  run_optimisation_loop(optimizer, renderer, options.steps, options.lr_decay, losses, report);
+  if (report) report->seconds = timer.finish();
   return {optimizer.positions(), optimizer.faces()};
 }
 

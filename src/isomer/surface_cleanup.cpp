@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "core/error.h"
+#include "isomer/loop_subdivision.h"
 #include "isomer/mesh_repair.h"
 #include "isomer/open3d_bridge.h"
 
@@ -36,11 +37,11 @@ void smooth_uniform_laplacian(Mesh& mesh, int iterations) {
 
 namespace {
 
-double mean_edge_length(const open3d::geometry::TriangleMesh& mesh) {
+double mean_edge_length(const Mesh& mesh) {
   double total = 0;
   size_t count = 0;
-  for (const Eigen::Vector3i& f : mesh.triangles_)
-    for (int k = 0; k < 3; ++k, ++count) total += (mesh.vertices_[f[k]] - mesh.vertices_[f[(k + 1) % 3]]).norm();
+  for (const Vec3i& f : mesh.faces)
+    for (int k = 0; k < 3; ++k, ++count) total += (mesh.positions[f[k]] - mesh.positions[f[(k + 1) % 3]]).norm();
   return count ? total / double(count) : 0.0;
 }
 
@@ -67,13 +68,16 @@ Mesh smooth_and_subdivide(const Mesh& input, const SurfaceCleanupOptions& option
 
   // Loop subdivision needs a manifold (pymeshlab repairs non-manifold vertices and edges here too).
   repair_to_closed_manifold(smoothed);
-  auto mesh = to_open3d(smoothed);
-  drop_crumbs(*mesh, options.min_component_faces);
-  const BoundingBox box = bounding_box(smoothed.positions);
+  auto o3d = to_open3d(smoothed);
+  drop_crumbs(*o3d, options.min_component_faces);
+  Mesh mesh = from_open3d(*o3d);
+  const BoundingBox box = bounding_box(mesh.positions);
   const double threshold = options.subdivision_threshold * double(box.extent().norm());
-  for (int it = 0; it < options.subdivision_iterations && mean_edge_length(*mesh) > threshold; ++it)
-    mesh = mesh->SubdivideLoop(1);
-  return from_open3d(*mesh);
+  for (int it = 0; it < options.subdivision_iterations && mean_edge_length(mesh) > threshold &&
+                   mesh.faces.size() * 4 <= options.max_faces;
+       ++it)
+    mesh = loop_subdivide(mesh);
+  return mesh;
 }
 
 }  // namespace u3d

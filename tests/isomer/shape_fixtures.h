@@ -84,7 +84,7 @@ inline double mean_normal_error_deg(const std::vector<Vec3f>& positions, const s
   double sum = 0;
   size_t count = 0;
   for (size_t i = 0; i < cameras.size(); ++i) {
-    const RenderedView& v = r.view(i);
+    const DifferentiableView& v = r.view(i);
     for (int32_t p : v.covered) {
       const float* a = v.image.data.data() + size_t(p) * 4;
       const float* b = maps[i].data.data() + size_t(p) * 4;

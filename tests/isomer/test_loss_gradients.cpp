@@ -50,7 +50,7 @@ Outcome check_image_term(Term term) {
     auto loss = [&](const std::vector<Vec3f>& pos, std::vector<Vec3f>* grad) {
       const VertexNormals n = compute_vertex_normals(pos, m.faces);
       r.render(pos, m.faces, n.unit);
-      const RenderedView& v = r.view(0);
+      const DifferentiableView& v = r.view(0);
       decisions.assign(v.raster.face_id.begin(), v.raster.face_id.end());
       for (const AntialiasPair& a : v.pairs)
         decisions.push_back((int64_t(a.pixel0) << 34) + (int64_t(a.face) << 4) + (a.edge << 1) + (a.alpha > 0.f));

@@ -169,7 +169,7 @@ TEST(RenderGradients, NormalRendererMatchesFiniteDifferences) {
     auto loss = [&](const std::vector<Vec3f>& pos, std::vector<Vec3f>* grad) {
       VertexNormals n = compute_vertex_normals(pos, m.faces);
       renderer.render(pos, m.faces, n.unit);
-      RenderedView& v = renderer.view(0);
+      DifferentiableView& v = renderer.view(0);
       face_ids.assign(v.raster.face_id.begin(), v.raster.face_id.end());
       for (const AntialiasPair& a : v.pairs) face_ids.push_back((int64_t(a.pixel0) << 34) + (int64_t(a.face) << 4) + (a.edge << 1) + (a.alpha > 0.f));
       double s = 0;

@@ -28,6 +28,9 @@ TEST(SurfaceCleanup, DropsCrumbsAndStaysClosedManifold) {
   EXPECT_TRUE(topo.closed_manifold()) << topo.summary();
   EXPECT_EQ(topo.components, 2) << topo.summary();
   EXPECT_EQ(cleaned.face_count(), (320u + 80u) * 16u);
+
+  options.max_faces = (320u + 80u) * 4u;  // room for one step only
+  EXPECT_EQ(smooth_and_subdivide(mesh, options).face_count(), (320u + 80u) * 4u);
 }
 
 }  // namespace

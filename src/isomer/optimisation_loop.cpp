@@ -1,0 +1,56 @@
+#include "isomer/optimisation_loop.h"
+
+#include <chrono>
+
+namespace u3d {
+
+namespace {
+
+// Adds the seconds since the last call to `into`.
+class LapClock {
+ public:
+  void lap(double& into) {
+    const auto now = std::chrono::steady_clock::now();
+    into += std::chrono::duration<double>(now - last_).count();
+    last_ = now;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+};
+
+}  // namespace
+
+void run_optimisation_loop(MeshOptimizer& optimizer, NormalRenderer& renderer, int steps, float lr_decay,
+                           const StageLosses& losses, StageReport* report) {
+  StageProfile profile;
+  std::vector<Vec3f> grad;
+  double loss = 0.0;
+  LapClock clock;
+  for (int step = 0; step < steps; ++step) {
+    optimizer.set_learning_rate(optimizer.learning_rate() * lr_decay);
+    const std::vector<Vec3f>& positions = optimizer.positions();
+    const std::vector<Vec3i>& faces = optimizer.faces();
+    const VertexNormals normals = compute_vertex_normals(positions, faces);
+    clock.lap(profile.step);
+    renderer.render(positions, faces, normals.unit);
+    clock.lap(profile.render);
+    grad.assign(positions.size(), Vec3f::Zero());
+    loss = losses(step, positions, faces, normals, grad);
+    clock.lap(profile.losses);
+    renderer.backward(positions, faces, normals, grad);
+    clock.lap(profile.backward);
+    optimizer.step(grad);
+    clock.lap(profile.step);
+    optimizer.remesh();
+    clock.lap(profile.remesh);
+  }
+  if (report) {
+    report->steps = steps;
+    report->final_loss = loss;
+    report->final_edge_length = optimizer.mean_reference_edge_length();
+    report->profile = profile;
+  }
+}
+
+}  // namespace u3d
