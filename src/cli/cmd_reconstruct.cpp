@@ -136,6 +136,12 @@ const CommandRegistration registration{
                      "Steps of the refinement stage (default: " + std::to_string(RefineStageOptions{}.steps) + ")")
           ->check(CLI::Range(0, 100000))
           ->excludes(init_only);
+      sub.add_option("--refine-resolution", o.refine.render_resolution,
+                     "Longest side the refinement renders the views at; larger normal maps are downsampled "
+                     "(0 = the maps' own)")
+          ->capture_default_str()
+          ->check(CLI::Range(0, 8192))
+          ->excludes(init_only);
       sub.add_option("--poisson-depth", o.init.poisson_depth, "Screened Poisson octree depth")
           ->capture_default_str()
           ->check(CLI::Range(4, 12));

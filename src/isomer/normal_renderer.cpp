@@ -52,7 +52,7 @@ void NormalRenderer::render(const std::vector<Vec3f>& positions, const std::vect
     zero_pixels(v.color, v.active);
     zero_pixels(v.image, v.active);
     zero_pixels(v.grad_image, v.active);
-    v.raster = rasterize(positions, faces, v.camera, RasterOptions{.cull_backfaces = true});
+    rasterize_into(positions, faces, v.camera, v.raster, RasterOptions{.cull_backfaces = true});
     v.projection = project_to_screen(positions, v.camera);
     v.covered = covered_pixels(v.raster);
     interpolate(v.raster, v.covered, faces, attributes_.data(), kChannels, v.color);

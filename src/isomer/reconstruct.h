@@ -3,7 +3,7 @@
 // (paper Sec. 3.2, official `geo_reconstruct`):
 //   1. initial mesh            (initial_mesh.h; or a sphere)
 //   2. coarse optimisation     (coarse_stage.h: fit normals and masks at 512 px)
-//   3. refinement              (refine_stage.h: ExplicitTarget normals, full-resolution maps)
+//   3. refinement              (refine_stage.h: ExplicitTarget normals, rendered at up to 512 px)
 //   4. smooth and subdivide    (surface_cleanup.h)
 //   5. colouring               (explicit_target.h: ExplicitTarget + completion)
 //   6. output transform        (identity, or the official release's scale)

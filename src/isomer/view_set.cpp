@@ -1,6 +1,7 @@
 #include "isomer/view_set.h"
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <vector>
@@ -25,7 +26,8 @@ bool has_png_signature(const std::filesystem::path& path) {
 }
 
 void require_finite(const Image& image, const std::string& name) {
-  for (float v : image.data) require(std::isfinite(v), name + ": contains NaN or infinite values");
+  const bool finite = std::all_of(image.data.begin(), image.data.end(), [](float v) { return std::isfinite(v); });
+  require(finite, name + ": contains NaN or infinite values");  // the message is built once, not per value
 }
 
 Eigen::Vector3f decode_normal(const float* px) { return {2.f * px[0] - 1.f, 2.f * px[1] - 1.f, 2.f * px[2] - 1.f}; }

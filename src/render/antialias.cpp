@@ -123,11 +123,13 @@ std::vector<AntialiasPair> find_antialias_pairs(const RasterBuffer& raster, cons
   std::vector<AntialiasPair> pairs;
   const std::vector<uint8_t> silhouette = silhouette_edges(faces, neighbors, projection);
   const int w = raster.width, h = raster.height;
+  // Pairs differ in face id, so both pixels are background outside the footprint grown by one pixel.
+  const PixelRect& r = raster.footprint;
   AntialiasPair pair;
-  for (int y = 0; y < h; ++y) {
+  for (int y = std::max(r.y0 - 1, 0); y <= r.y1; ++y) {
     const int32_t* row = raster.face_id.data() + size_t(y) * w;
     const int32_t* below = y + 1 < h ? row + w : nullptr;
-    for (int x = 0; x < w; ++x) {
+    for (int x = std::max(r.x0 - 1, 0); x <= r.x1; ++x) {
       const int32_t p = y * w + x;
       if (x + 1 < w && row[x] != row[x + 1] && analyse_pair(raster, faces, silhouette, projection, p, p + 1, false, pair))
         pairs.push_back(pair);

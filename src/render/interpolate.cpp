@@ -4,9 +4,10 @@ namespace u3d {
 
 std::vector<int32_t> covered_pixels(const RasterBuffer& raster) {
   std::vector<int32_t> pixels;
-  const size_t n = raster.pixel_count();
-  for (size_t p = 0; p < n; ++p)
-    if (raster.face_id[p] >= 0) pixels.push_back(int32_t(p));
+  const PixelRect& r = raster.footprint;
+  for (int y = r.y0; y <= r.y1; ++y)
+    for (int x = r.x0, p = y * raster.width + r.x0; x <= r.x1; ++x, ++p)
+      if (raster.face_id[p] >= 0) pixels.push_back(p);
   return pixels;
 }
 

@@ -284,8 +284,40 @@ inline void draw_in_tile(const ScreenTriangle& t, const CornerBary* clipped_corn
 
 }  // namespace
 
+namespace {
+
+void reset_to_background(RasterBuffer& buf, int width, int height) {
+  if (buf.width != width || buf.height != height) {
+    buf.width = width;
+    buf.height = height;
+    const size_t pixels = buf.pixel_count();
+    buf.face_id.assign(pixels, -1);
+    buf.bary.assign(pixels, Vec2f(0.f, 0.f));
+    buf.depth.assign(pixels, std::numeric_limits<float>::infinity());
+  } else if (!buf.footprint.empty()) {
+    const PixelRect& r = buf.footprint;
+    const size_t n = size_t(r.x1 - r.x0 + 1);
+    for (int y = r.y0; y <= r.y1; ++y) {
+      const size_t row = size_t(y) * width + r.x0;
+      std::fill_n(buf.face_id.begin() + row, n, -1);
+      std::fill_n(buf.bary.begin() + row, n, Vec2f(0.f, 0.f));
+      std::fill_n(buf.depth.begin() + row, n, std::numeric_limits<float>::infinity());
+    }
+  }
+  buf.footprint = PixelRect{};
+}
+
+}  // namespace
+
 RasterBuffer rasterize(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& faces, const Camera& camera,
                        const RasterOptions& options) {
+  RasterBuffer buf;
+  rasterize_into(positions, faces, camera, buf, options);
+  return buf;
+}
+
+void rasterize_into(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& faces, const Camera& camera,
+                    RasterBuffer& buf, const RasterOptions& options) {
   const int width = camera.width, height = camera.height;
   require(width > 0 && height > 0, "rasterize: camera resolution must be positive");
   require(width <= kMaxResolution && height <= kMaxResolution,
@@ -381,6 +413,7 @@ RasterBuffer rasterize(const std::vector<Vec3f>& positions, const std::vector<Ve
   const int tiles_x = (width + kTileSize - 1) / kTileSize, tiles_y = (height + kTileSize - 1) / kTileSize;
   const size_t tile_count = size_t(tiles_x) * tiles_y;
   std::vector<uint32_t> counts(size_t(chunks) * tile_count, 0);
+  std::vector<PixelRect> chunk_rect(chunks, PixelRect{width, height, -1, -1});
   auto for_each_tile_of = [&](const ScreenTriangle& t, auto&& fn) {
     for (int ty = t.py0 >> kTileBits; ty <= (t.py1 >> kTileBits); ++ty)
       for (int tx = t.px0 >> kTileBits; tx <= (t.px1 >> kTileBits); ++tx) fn(size_t(ty) * tiles_x + tx);
@@ -389,9 +422,19 @@ RasterBuffer rasterize(const std::vector<Vec3f>& positions, const std::vector<Ve
   {
     for (int c = omp_get_thread_num(); c < chunks; c += omp_get_num_threads()) {
       uint32_t* count = counts.data() + size_t(c) * tile_count;
-      for_each_triangle_of_chunk(c, [&](int64_t i) { for_each_tile_of(triangle(i), [&](size_t tile) { ++count[tile]; }); });
+      PixelRect& rect = chunk_rect[c];
+      for_each_triangle_of_chunk(c, [&](int64_t i) {
+        const ScreenTriangle& t = triangle(i);
+        rect = {std::min<int>(rect.x0, t.px0), std::min<int>(rect.y0, t.py0), std::max<int>(rect.x1, t.px1),
+                std::max<int>(rect.y1, t.py1)};
+        for_each_tile_of(t, [&](size_t tile) { ++count[tile]; });
+      });
     }
   }
+  PixelRect drawn{width, height, -1, -1};
+  for (const PixelRect& r : chunk_rect)
+    drawn = {std::min(drawn.x0, r.x0), std::min(drawn.y0, r.y0), std::max(drawn.x1, r.x1), std::max(drawn.y1, r.y1)};
+  if (drawn.empty()) drawn = PixelRect{};
   std::vector<size_t> tile_start(tile_count + 1);
   std::vector<size_t> cursor(size_t(chunks) * tile_count);
   size_t total = 0;
@@ -415,14 +458,9 @@ RasterBuffer rasterize(const std::vector<Vec3f>& positions, const std::vector<Ve
   }
 
   // 4. Tiles.
-  RasterBuffer buf;
-  buf.width = width;
-  buf.height = height;
+  reset_to_background(buf, width, height);
   const size_t pixels = buf.pixel_count();
-  // std::vector writes every element on construction anyway, so it writes the background values.
-  buf.face_id.assign(pixels, -1);
-  buf.bary.assign(pixels, Vec2f(0.f, 0.f));
-  buf.depth.assign(pixels, std::numeric_limits<float>::infinity());
+  buf.footprint = drawn;
 #pragma omp parallel for schedule(dynamic, 1) if (int64_t(total) + int64_t(pixels / 64) > kMinParallelWork)
   for (int64_t tile = 0; tile < int64_t(tile_count); ++tile) {
     int x0 = int(tile % tiles_x) * kTileSize, y0 = int(tile / tiles_x) * kTileSize;
@@ -430,7 +468,6 @@ RasterBuffer rasterize(const std::vector<Vec3f>& positions, const std::vector<Ve
     for (size_t k = tile_start[tile]; k < tile_start[tile + 1]; ++k)
       draw_in_tile(triangle(bins[k]), corners.data(), x0, y0, x1, y1, buf);
   }
-  return buf;
 }
 
 }  // namespace u3d

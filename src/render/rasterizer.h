@@ -19,9 +19,18 @@ struct RasterOptions {
   bool cull_backfaces = false;
 };
 
+// Inclusive pixel rectangle; empty when x0 > x1.
+struct PixelRect {
+  int x0 = 0, y0 = 0, x1 = -1, y1 = -1;
+  bool empty() const { return x0 > x1 || y0 > y1; }
+};
+
 struct RasterBuffer {
   int width = 0;
   int height = 0;
+  // Every covered pixel lies inside this rectangle (the union of the drawn triangles' pixel ranges):
+  // later passes scan only it, and rasterize_into resets only it.
+  PixelRect footprint;
   std::vector<int32_t> face_id;  // per pixel; -1 = background
   std::vector<Vec2f> bary;       // per pixel (b1, b2) of face vertices 1 and 2; b0 = 1 - b1 - b2;
                                  // perspective-correct, i.e. barycentrics of the 3D surface point
@@ -33,6 +42,12 @@ struct RasterBuffer {
 
 RasterBuffer rasterize(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& faces, const Camera& camera,
                        const RasterOptions& options = {});
+
+// The same into an existing buffer, for frame-by-frame rendering: when `buf` has the camera's size its
+// storage is reused and only its previous footprint is reset, so the cost follows the object's size
+// on screen rather than the image's.
+void rasterize_into(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& faces, const Camera& camera,
+                    RasterBuffer& buf, const RasterOptions& options = {});
 
 inline RasterBuffer rasterize(const Mesh& mesh, const Camera& camera, const RasterOptions& options = {}) {
   return rasterize(mesh.positions, mesh.faces, camera, options);

@@ -347,3 +347,34 @@ TEST(Rasterizer, LargeGridIsWatertightWithoutDoubleCoverage) {
   EXPECT_EQ(holes, 0);
   EXPECT_EQ(mismatched, 0);
 }
+
+// Frame-by-frame reuse: after the mesh moves (and shrinks, and leaves the image), rasterize_into into
+// the old buffer equals a fresh rasterization, and the footprint bounds every covered pixel.
+TEST(Rasterizer, ReusedBufferEqualsFreshRasterization) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-1.f, 1.f);
+  const Camera cam = view_camera(View::Front, 96);
+  RasterBuffer reused;
+  for (int frame = 0; frame < 6; ++frame) {
+    const float scale = frame == 4 ? 0.f : 1.f / float(1 + frame);  // frame 4: nothing on screen
+    std::vector<Vec3f> p;
+    std::vector<Vec3i> f;
+    for (int t = 0; t < 40; ++t) {
+      for (int k = 0; k < 3; ++k) p.push_back(frame == 4 ? Vec3f(5.f, 5.f, 0.f) : Vec3f(u(rng), u(rng), u(rng)) * scale);
+      f.push_back({3 * t, 3 * t + 1, 3 * t + 2});
+    }
+    rasterize_into(p, f, cam, reused);
+    const RasterBuffer fresh = rasterize(p, f, cam);
+    ASSERT_EQ(reused.face_id, fresh.face_id) << "frame " << frame;
+    ASSERT_EQ(reused.depth, fresh.depth) << "frame " << frame;
+    for (size_t i = 0; i < fresh.pixel_count(); ++i) {
+      ASSERT_EQ(reused.bary[i], fresh.bary[i]) << "frame " << frame << " pixel " << i;
+      if (!fresh.covered(i)) continue;
+      const int x = int(i % 96), y = int(i / 96);
+      ASSERT_TRUE(x >= fresh.footprint.x0 && x <= fresh.footprint.x1 && y >= fresh.footprint.y0 &&
+                  y <= fresh.footprint.y1)
+          << "frame " << frame << " pixel " << i;
+    }
+    EXPECT_EQ(fresh.footprint.empty(), frame == 4);
+  }
+}
