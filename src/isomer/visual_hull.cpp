@@ -1,15 +1,12 @@
 #include "isomer/visual_hull.h"
 
-#include <open3d/geometry/TriangleMesh.h>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
 #include "core/error.h"
 #include "core/progress.h"
-#include "isomer/mesh_repair.h"
-#include "isomer/open3d_bridge.h"
+#include "isomer/quadric_decimation.h"
 
 namespace u3d {
 namespace {
@@ -47,23 +44,6 @@ MaskView mask_view(const ViewSet& views, View v) {
   }
   require(any_inside, std::string("visual hull: the ") + view_name(v) + " mask is empty");
   return m;
-}
-
-// Quadric decimation leaves the odd non-manifold edge or flipped face; the repair closes them again.
-Mesh decimated(const Mesh& mesh, int target_faces) {
-  StageTimer timer("visual hull: decimating " + std::to_string(mesh.face_count()) + " faces");
-  auto simplified =
-      to_open3d(mesh)->SimplifyQuadricDecimation(target_faces, std::numeric_limits<double>::infinity(), 1.0);
-  simplified->RemoveDegenerateTriangles();
-  simplified->RemoveDuplicatedTriangles();
-  simplified->RemoveDuplicatedVertices();
-  simplified->RemoveUnreferencedVertices();
-  timer.finish();
-  StageTimer t2("TMP repair");
-  Mesh out = from_open3d(*simplified);
-  const MeshRepairReport repair = repair_to_closed_manifold(out);
-  require(!out.faces.empty() && repair.closed_manifold, "visual hull: decimation left no closed surface");
-  return out;
 }
 
 }  // namespace
@@ -107,7 +87,8 @@ Mesh carve_visual_hull(const ViewSet& views, const VisualHullOptions& options) {
   surface_timer.finish();
   require(!surface.faces.empty(), "visual hull: the four masks share no volume (no voxel is inside all of them)");
   if (options.target_faces == 0 || surface.face_count() <= size_t(options.target_faces)) return surface;
-  return decimated(surface, options.target_faces);
+  StageTimer decimate_timer("visual hull: decimating " + std::to_string(surface.face_count()) + " faces");
+  return decimate_closed_mesh(surface, size_t(options.target_faces));
 }
 
 }  // namespace u3d

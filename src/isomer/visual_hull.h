@@ -11,8 +11,8 @@
 // object touching the box still gives a closed surface.
 //
 // Surface. The zero level set of the field (marching_tetrahedra.h): closed, manifold, outward
-// normals. It has about a million faces at resolution 256; quadric decimation (Open3D) brings it to
-// `target_faces`, followed by the manifold repair the other stages use.
+// normals. It has about a million faces at resolution 256; quadric decimation (quadric_decimation.h)
+// brings it to `target_faces`, still closed and manifold.
 #include "core/mesh.h"
 #include "isomer/marching_tetrahedra.h"
 #include "isomer/view_set.h"
