@@ -36,7 +36,7 @@ ReconstructOptions stage_options(const ReconstructArgs& args) {
   if (args.coarse_steps >= 0) o.coarse.steps = args.coarse_steps;
   if (args.refine_steps >= 0) o.refine.steps = args.refine_steps;
   o.refine.use_explicit_target = !args.no_explicit_target;
-  o.run_coarse = o.run_refine = !args.init_only;
+  o.run_coarse = o.run_refine = !args.init_only && !o.visual_hull;
   return o;
 }
 
@@ -122,26 +122,40 @@ const CommandRegistration registration{
           ->check(CLI::Range(100, 10000000));
       CLI::Option* init_only = sub.add_flag(
           "--init-only", args->init_only, "Ablation: skip both optimisation stages (initial mesh -> clean-up -> colouring)");
+      CLI::Option* visual_hull = sub.add_flag(
+          "--visual-hull", o.visual_hull,
+          "Baseline: the visual hull carved from the four masks instead of initial mesh and optimisation "
+          "(visual hull -> clean-up -> colouring)");
+      visual_hull->excludes(init_only);
+      sub.add_option("--hull-resolution", o.hull.resolution, "Voxels per axis of the --visual-hull grid over [-1,1]^3")
+          ->capture_default_str()
+          ->check(CLI::Range(4, 1024))
+          ->needs(visual_hull);
       sub.add_flag("--no-explicit-target", args->no_explicit_target,
                    "Ablation: refine with the plain multi-view normal loss instead of ExplicitTarget normals")
-          ->excludes(init_only);
+          ->excludes(init_only)
+          ->excludes(visual_hull);
       sub.add_flag("--sphere-init", o.sphere_init,
                    "Start the coarse stage from a sphere (official sphere schedule) instead of the initial mesh")
-          ->excludes(init_only);
+          ->excludes(init_only)
+          ->excludes(visual_hull);
       sub.add_option("--coarse-steps", args->coarse_steps,
                      "Steps of the coarse stage (default: " + std::to_string(CoarseStageOptions{}.steps) + ")")
           ->check(CLI::Range(0, 100000))
-          ->excludes(init_only);
+          ->excludes(init_only)
+          ->excludes(visual_hull);
       sub.add_option("--refine-steps", args->refine_steps,
                      "Steps of the refinement stage (default: " + std::to_string(RefineStageOptions{}.steps) + ")")
           ->check(CLI::Range(0, 100000))
-          ->excludes(init_only);
+          ->excludes(init_only)
+          ->excludes(visual_hull);
       sub.add_option("--refine-resolution", o.refine.render_resolution,
                      "Longest side the refinement renders the views at; larger normal maps are downsampled "
                      "(0 = the maps' own)")
           ->capture_default_str()
           ->check(CLI::Range(0, 8192))
-          ->excludes(init_only);
+          ->excludes(init_only)
+          ->excludes(visual_hull);
       sub.add_option("--poisson-depth", o.init.poisson_depth, "Screened Poisson octree depth")
           ->capture_default_str()
           ->check(CLI::Range(4, 12));

@@ -37,6 +37,7 @@ StageViews stage_views(const ViewSet& views) {
 }
 
 Mesh stage_initial_mesh(const ViewSet& views, const ReconstructOptions& options) {
+  if (options.visual_hull) return carve_visual_hull(views, options.hull);
   if (options.sphere_init) return from_stage_mesh(sphere_initial_mesh());
   return build_initial_mesh(views, options.init);
 }
@@ -75,7 +76,8 @@ ReconstructResult reconstruct(const ViewSet& views, const ReconstructOptions& op
     result.timings.push_back({name, timer.finish()});
   };
   Mesh mesh;
-  timed(options.sphere_init ? "sphere" : "initial mesh", [&] { mesh = stage_initial_mesh(views, options); });
+  const char* start = options.visual_hull ? "visual hull" : options.sphere_init ? "sphere" : "initial mesh";
+  timed(start, [&] { mesh = stage_initial_mesh(views, options); });
   if (options.run_coarse || options.run_refine) {
     const StageViews maps = stage_views(views);
     if (options.run_coarse) timed("coarse", [&] { mesh = stage_coarse(mesh, maps, options, &result.coarse); });

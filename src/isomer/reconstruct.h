@@ -1,7 +1,7 @@
 #pragma once
 // ISOMER, the whole reconstruction from a view set to a coloured mesh, as a fixed sequence of stages
 // (paper Sec. 3.2, official `geo_reconstruct`):
-//   1. initial mesh            (initial_mesh.h; or a sphere)
+//   1. initial mesh            (initial_mesh.h; or a sphere, or the visual hull: visual_hull.h)
 //   2. coarse optimisation     (coarse_stage.h: fit normals and masks at 512 px)
 //   3. refinement              (refine_stage.h: ExplicitTarget normals, rendered at up to 512 px)
 //   4. smooth and subdivide    (surface_cleanup.h)
@@ -18,6 +18,7 @@
 #include "isomer/refine_stage.h"
 #include "isomer/surface_cleanup.h"
 #include "isomer/view_set.h"
+#include "isomer/visual_hull.h"
 
 namespace u3d {
 
@@ -31,6 +32,8 @@ inline constexpr int kCoarseMapResolution = 512;
 struct ReconstructOptions {
   InitialMeshOptions init;
   bool sphere_init = false;  // start the coarse stage from a sphere instead of the initial mesh
+  bool visual_hull = false;  // start from the hull carved from the masks (the baseline: with both stages off)
+  VisualHullOptions hull;
   bool run_coarse = true;
   bool run_refine = true;
   CoarseStageOptions coarse;  // with sphere_init, CoarseStageOptions::from_sphere() is the official schedule

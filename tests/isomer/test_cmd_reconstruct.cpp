@@ -103,6 +103,30 @@ TEST(ReconstructCli, AblationFlagsSelectTheStages) {
   EXPECT_FALSE(std::filesystem::exists(dir / "x.ply"));
 }
 
+// The visual-hull baseline of the object benchmark: carve, clean up, colour; no optimisation.
+TEST(ReconstructCli, VisualHullReplacesInitialMeshAndOptimisation) {
+  const auto dir = testing::fresh_temp_dir("cli_hull");
+  testing::write_view_set(testing::sphere_views(0.6f, 96), dir / "views");
+  const std::string views = (dir / "views").string();
+  const auto out = dir / "hull.glb";
+  const CliResult hull = run_cli(views + " -o " + out.string() + " --visual-hull --hull-resolution 64", dir / "hull.txt");
+  ASSERT_EQ(hull.status, 0) << hull.output;
+  EXPECT_NE(hull.output.find(", visual hull "), std::string::npos) << hull.output;
+  for (const char* stage : {", initial mesh ", ", coarse ", ", refine "})
+    EXPECT_EQ(hull.output.find(stage), std::string::npos) << stage << hull.output;
+  const Mesh mesh = read_mesh(out);
+  EXPECT_TRUE(mesh.has_colors());
+  EXPECT_TRUE(mesh_topology(mesh).closed_manifold()) << mesh_topology(mesh).summary();
+  for (double v : printed_iou(hull.output)) EXPECT_GE(v, 0.95) << hull.output;
+
+  const CliResult clash = run_cli(views + " -o " + (dir / "x.ply").string() + " --visual-hull --init-only",
+                                  dir / "clash.txt");
+  EXPECT_NE(clash.status, 0) << clash.output;
+  const CliResult orphan = run_cli(views + " -o " + (dir / "x.ply").string() + " --hull-resolution 64", dir / "orphan.txt");
+  EXPECT_NE(orphan.status, 0) << orphan.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.ply"));
+}
+
 TEST(ReconstructCli, BadInputFailsCleanlyAndWritesNothing) {
   const ViewSet good = testing::sphere_views(0.6f, 64);
   auto expect_failure = [&](const std::string& name, const std::function<void(const std::filesystem::path&)>& spoil,

@@ -1,0 +1,16 @@
+#pragma once
+// Quadric-error edge-collapse decimation (Garland and Heckbert 1997) for closed, consistently oriented
+// manifold meshes, keeping them closed and manifold: an edge collapses only where the link condition
+// holds, no neighbouring face flips or degenerates, and no vertex is left with fewer than three faces.
+//
+// Why not Open3D's SimplifyQuadricDecimation: it takes about 100 s on the million faces of a 256^3
+// visual hull (2 shared cores), this takes a few seconds; and it may leave non-manifold edges.
+#include "core/mesh.h"
+
+namespace u3d {
+
+// Collapses the cheapest edges until at most `target_faces` remain (or no collapse is allowed any
+// more). Only geometry is kept. Edges without exactly two faces (borders) are never collapsed.
+Mesh decimate_closed_mesh(const Mesh& mesh, size_t target_faces);
+
+}  // namespace u3d

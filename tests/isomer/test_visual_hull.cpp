@@ -1,0 +1,164 @@
+// The visual hull of four exact views: closed-form shapes (a sphere's hull is two crossed cylinders,
+// a box's hull is the box), closed and outward, and clear errors for masks that carve nothing.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+
+#include "core/error.h"
+#include "isomer/mesh_topology.h"
+#include "isomer/visual_hull.h"
+#include "synthetic_views.h"
+
+namespace u3d {
+namespace {
+
+// The four exact views of the axis-aligned box [lo, hi]: each view sees the box's face toward it.
+ViewSet box_views(const Vec3f& lo, const Vec3f& hi, int resolution) {
+  std::array<Image, 4> rgb, normal_maps;
+  std::array<std::string, 4> rgb_names, normal_names;
+  for (View v : kAllViews) {
+    const size_t k = size_t(v);
+    const Camera camera = view_camera(v, resolution);
+    const Eigen::Matrix3f camera_to_world = camera.rotation().transpose();
+    const Vec3f toward = camera.toward_camera();
+    Image& c = rgb[k] = Image(resolution, resolution, 4, 0.f);
+    Image& n = normal_maps[k] = Image(resolution, resolution, 4, 0.f);
+    for (int y = 0; y < resolution; ++y)
+      for (int x = 0; x < resolution; ++x) {
+        const float cx = (x + 0.5f) * 2.f / resolution - 1.f, cy = 1.f - (y + 0.5f) * 2.f / resolution;
+        const Vec3f on_plane = camera_to_world * Vec3f(cx, cy, 0.f);  // the view axis component is 0
+        bool inside = true;
+        for (int i = 0; i < 3; ++i)
+          if (std::abs(toward[i]) < 0.5f) inside = inside && on_plane[i] > lo[i] && on_plane[i] < hi[i];
+        if (!inside) continue;
+        for (int i = 0; i < 3; ++i) {
+          n.at(x, y, i) = 0.5f * (toward[i] + 1.f);
+          c.at(x, y, i) = 0.5f;
+        }
+        n.at(x, y, 3) = c.at(x, y, 3) = 1.f;
+      }
+    rgb_names[k] = view_file_name(v, false);
+    normal_names[k] = view_file_name(v, true);
+  }
+  return make_view_set(rgb, normal_maps, NormalSpace::World, rgb_names, normal_names);
+}
+
+bool consistently_oriented_and_closed(const Mesh& mesh) {
+  std::map<std::pair<int, int>, int> directed;
+  for (const Vec3i& f : mesh.faces)
+    for (int k = 0; k < 3; ++k) ++directed[{f[k], f[(k + 1) % 3]}];
+  for (const auto& [edge, count] : directed) {
+    auto reverse = directed.find({edge.second, edge.first});
+    if (count != 1 || reverse == directed.end() || reverse->second != 1) return false;
+  }
+  return true;
+}
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// The hull of a sphere from the four axis views (front/back along z, right/left along x) is the
+// intersection of two cylinders of radius r along z and x: volume 16/3 r^3, extent [-r, r]^3.
+TEST(VisualHull, SphereCarvesToTheBicylinder) {
+  const float r = 0.6f;
+  const ViewSet views = testing::sphere_views(r, 256);
+  const int resolution = 128;
+  const float voxel = 2.f / resolution;
+  const Mesh hull = carve_visual_hull(views, {resolution, 0});
+  EXPECT_TRUE(consistently_oriented_and_closed(hull));
+  const MeshTopology topo = mesh_topology(hull);
+  EXPECT_TRUE(topo.closed_manifold()) << topo.summary();
+  EXPECT_EQ(topo.components, 1);
+  const double exact = 16.0 / 3.0 * r * r * r;
+  EXPECT_NEAR(topo.volume / exact, 1.0, 0.01) << topo.volume << " vs " << exact;
+  const BoundingBox box = bounding_box(hull.positions);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(box.min[i], -r, voxel) << i;
+    EXPECT_NEAR(box.max[i], r, voxel) << i;
+  }
+  // Points of the bicylinder's surface: on one cylinder and inside the other.
+  for (const Vec3f& p : hull.positions) {
+    const float along_z = std::hypot(p.x(), p.y()), along_x = std::hypot(p.z(), p.y());
+    EXPECT_LT(std::max(along_z, along_x), r + 0.5f * voxel);
+    EXPECT_GT(std::max(along_z, along_x), r - voxel);
+  }
+
+  // Decimated (the default path): still closed and outward, with the same volume.
+  const Mesh small = carve_visual_hull(views, {resolution, 5000});
+  EXPECT_LE(small.face_count(), 5000u);
+  EXPECT_TRUE(consistently_oriented_and_closed(small));
+  const MeshTopology small_topo = mesh_topology(small);
+  EXPECT_TRUE(small_topo.closed_manifold()) << small_topo.summary();
+  EXPECT_NEAR(small_topo.volume / exact, 1.0, 0.01);
+}
+
+// An off-centre box, different in every axis: a mixed-up view axis or sign would move or resize it.
+TEST(VisualHull, BoxCarvesToTheBox) {
+  // Faces on pixel borders of the 256 px views (multiples of 1/128).
+  const Vec3f lo(0.125f, -0.25f, -0.75f), hi(0.625f, 0.375f, -0.125f);
+  const int resolution = 128;
+  const float voxel = 2.f / resolution;
+  const Mesh hull = carve_visual_hull(box_views(lo, hi, 256), {resolution, 0});
+  EXPECT_TRUE(consistently_oriented_and_closed(hull));
+  const MeshTopology topo = mesh_topology(hull);
+  EXPECT_TRUE(topo.closed_manifold()) << topo.summary();
+  const double exact = double((hi - lo).prod());
+  EXPECT_NEAR(topo.volume / exact, 1.0, 0.01) << topo.volume << " vs " << exact;
+  const BoundingBox box = bounding_box(hull.positions);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(box.min[i], lo[i], 1e-4f) << i;
+    EXPECT_NEAR(box.max[i], hi[i], 1e-4f) << i;
+  }
+  // Every vertex on the box's surface, except the chamfer along its edges (within a voxel).
+  for (const Vec3f& p : hull.positions) {
+    const Vec3f to_faces = (p - lo).cwiseMin(hi - p);
+    EXPECT_GT(to_faces.minCoeff(), -1e-4f);
+    EXPECT_LT(to_faces.minCoeff(), voxel);
+  }
+}
+
+TEST(VisualHull, FieldIsPositiveExactlyInsideEveryMask) {
+  const Vec3f lo(0.125f, -0.25f, -0.75f), hi(0.625f, 0.375f, -0.125f);
+  const int resolution = 32;
+  const ScalarGrid field = visual_hull_field(box_views(lo, hi, 64), resolution);
+  ASSERT_EQ(field.nx, resolution + 2);
+  int inside = 0;
+  for (int z = 0; z < field.nz; ++z)
+    for (int y = 0; y < field.ny; ++y)
+      for (int x = 0; x < field.nx; ++x) {
+        const Vec3f p = field.position(x, y, z);
+        const bool in_box = (p - lo).minCoeff() > 0.f && (hi - p).minCoeff() > 0.f;
+        EXPECT_EQ(field.values[field.index(x, y, z)] > 0.f, in_box) << p.transpose();
+        inside += in_box;
+      }
+  EXPECT_EQ(inside, 8 * 10 * 10);  // voxels of 1/16: 0.5 x 0.625 x 0.625
+}
+
+TEST(VisualHull, EmptyOrDisjointMasksAreErrors) {
+  ViewSet views = testing::sphere_views(0.6f, 64);
+  ViewSet empty = views;
+  for (size_t p = 0; p < empty[View::Right].rgb.pixel_count(); ++p) empty[View::Right].rgb.data[p * 4 + 3] = 0.f;
+  EXPECT_NE(error_of([&] { carve_visual_hull(empty, {32, 0}); }).find("right mask is empty"), std::string::npos);
+
+  // Front and back keep only the top of the disc, the sides only the bottom: no point is in all four.
+  ViewSet disjoint = views;
+  for (View v : kAllViews) {
+    Image& rgb = disjoint[v].rgb;
+    const bool keep_top = v == View::Front || v == View::Back;
+    for (int y = 0; y < rgb.height; ++y)
+      if ((y < rgb.height / 2) != keep_top)
+        for (int x = 0; x < rgb.width; ++x) rgb.at(x, y, 3) = 0.f;
+  }
+  EXPECT_NE(error_of([&] { carve_visual_hull(disjoint, {32, 0}); }).find("share no volume"), std::string::npos);
+  EXPECT_NE(error_of([&] { carve_visual_hull(views, {2, 0}); }).find("resolution"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace u3d
