@@ -56,7 +56,11 @@ void run_one(int resolution) {
     std::printf(" %s %.2f s,", t.name.c_str(), t.seconds);
     total += t.seconds;
   }
-  std::printf(" total %.2f s | %zu faces, %s | IoU %.3f %.3f %.3f %.3f | peak RSS %.0f MiB\n", total,
+  // CPU time of all threads, including rendering the views: comparable across runs on a shared machine.
+  const double cpu = double(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+                     1e-6 * double(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+  std::printf(" total %.2f s (process CPU %.1f s) | %zu faces, %s | IoU %.3f %.3f %.3f %.3f | peak RSS %.0f MiB\n",
+              total, cpu,
               result.mesh.face_count(), mesh_topology(result.mesh).summary().c_str(), iou[0], iou[1], iou[2], iou[3],
               double(usage.ru_maxrss) / 1024.0);
   for (const auto& [name, report] : {std::pair{"coarse", &result.coarse}, std::pair{"refine", &result.refine}}) {
