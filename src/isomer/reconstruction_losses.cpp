@@ -1,6 +1,7 @@
 #include "isomer/reconstruction_losses.h"
 
 #include <cmath>
+#include <numeric>
 
 #include "core/error.h"
 
@@ -28,19 +29,27 @@ NormalTarget make_normal_target(const Image& normal_map) {
 double masked_image_l2(NormalRenderer& renderer, const std::vector<const Image*>& references, int channels,
                        float weight) {
   require(references.size() == renderer.view_count(), "one reference image per view");
+  const int views = int(renderer.view_count());
+  for (int i = 0; i < views; ++i) {
+    const Image& ref = *references[size_t(i)];
+    const Image& image = renderer.view(size_t(i)).image;
+    require(ref.width == image.width && ref.height == image.height && ref.channels == 4,
+            "reference image must match the view resolution and be RGBA");
+  }
   size_t count = 0;
-  for (size_t i = 0; i < renderer.view_count(); ++i) {
-    const DifferentiableView& v = renderer.view(i);
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : count)
+  for (int i = 0; i < views; ++i) {
+    const DifferentiableView& v = renderer.view(size_t(i));
     for (int32_t p : v.active) count += v.image.data[size_t(p) * 4 + 3] > 0.5f;
   }
   if (count == 0) return 0.0;
   const float scale = weight / float(count * channels);
-  double total = 0.0;
-  for (size_t i = 0; i < renderer.view_count(); ++i) {
-    DifferentiableView& v = renderer.view(i);
-    const Image& ref = *references[i];
-    require(ref.width == v.image.width && ref.height == v.image.height && ref.channels == 4,
-            "reference image must match the view resolution and be RGBA");
+  std::vector<double> view_total(size_t(views), 0.0);  // summed in view order: deterministic
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int i = 0; i < views; ++i) {
+    DifferentiableView& v = renderer.view(size_t(i));
+    const Image& ref = *references[size_t(i)];
+    double& total = view_total[size_t(i)];
     for (int32_t p : v.active) {
       const float* img = v.image.data.data() + size_t(p) * 4;
       if (img[3] <= 0.5f) continue;
@@ -53,7 +62,7 @@ double masked_image_l2(NormalRenderer& renderer, const std::vector<const Image*>
       }
     }
   }
-  return total * scale;
+  return std::accumulate(view_total.begin(), view_total.end(), 0.0) * scale;
 }
 
 double background_alpha_l2(NormalRenderer& renderer, const std::vector<NormalTarget>& targets, float weight) {
@@ -62,10 +71,13 @@ double background_alpha_l2(NormalRenderer& renderer, const std::vector<NormalTar
   for (const NormalTarget& t : targets) count += t.background.size();
   if (count == 0) return 0.0;
   const float scale = weight / float(count);
-  double total = 0.0;
-  for (size_t i = 0; i < renderer.view_count(); ++i) {
-    DifferentiableView& v = renderer.view(i);
-    const NormalTarget& t = targets[i];
+  const int views = int(renderer.view_count());
+  std::vector<double> view_total(size_t(views), 0.0);
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int i = 0; i < views; ++i) {
+    DifferentiableView& v = renderer.view(size_t(i));
+    const NormalTarget& t = targets[size_t(i)];
+    double& total = view_total[size_t(i)];
     // Off the rendered footprint the alpha is 0: those pixels add the constant target alpha^2.
     total += t.background_alpha_sq;
     for (int32_t p : v.active) {
@@ -76,7 +88,7 @@ double background_alpha_l2(NormalRenderer& renderer, const std::vector<NormalTar
       v.grad_image.data[size_t(p) * 4 + 3] += 2.f * scale * d;
     }
   }
-  return total * scale;
+  return std::accumulate(view_total.begin(), view_total.end(), 0.0) * scale;
 }
 
 double expansion_loss(const std::vector<Vec3f>& normals, float weight, std::vector<Vec3f>& grad_positions) {
