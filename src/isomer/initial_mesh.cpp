@@ -9,6 +9,7 @@
 
 #include "core/error.h"
 #include "core/progress.h"
+#include "isomer/mesh_repair.h"
 #include "isomer/open3d_bridge.h"
 
 namespace u3d {
@@ -159,6 +160,9 @@ Mesh build_initial_mesh(const ViewSet& views, const InitialMeshOptions& options)
 
   Mesh mesh = from_open3d(*simplified);
   require(!mesh.faces.empty(), "initial mesh: decimation left no faces");
+  // Removing the non-manifold edges opens small holes (19 border edges on Spot): the optimisation
+  // stages and their back-face culling need a closed, outward surface.
+  repair_to_closed_manifold(mesh);
   return mesh;
 }
 

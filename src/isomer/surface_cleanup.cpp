@@ -1,13 +1,14 @@
 #include "isomer/surface_cleanup.h"
 
-#include <open3d/geometry/TriangleMesh.h>
-
 #include <algorithm>
+#include <numeric>
+
+#include <Eigen/Geometry>
 
 #include "core/error.h"
 #include "isomer/loop_subdivision.h"
 #include "isomer/mesh_repair.h"
-#include "isomer/open3d_bridge.h"
+#include "isomer/remesh/manifold_check.h"
 
 namespace u3d {
 
@@ -45,16 +46,43 @@ double mean_edge_length(const Mesh& mesh) {
   return count ? total / double(count) : 0.0;
 }
 
-// Removes connected pieces with fewer than min_faces faces, never the largest piece.
-void drop_crumbs(open3d::geometry::TriangleMesh& mesh, int min_faces) {
-  auto [cluster, cluster_faces, cluster_area] = mesh.ClusterConnectedTriangles();
-  if (cluster_faces.empty()) return;
-  const size_t largest = size_t(std::max_element(cluster_faces.begin(), cluster_faces.end()) - cluster_faces.begin());
-  std::vector<bool> drop(mesh.triangles_.size(), false);
-  for (size_t f = 0; f < drop.size(); ++f)
-    drop[f] = size_t(cluster[f]) != largest && cluster_faces[cluster[f]] < size_t(std::max(min_faces, 0));
-  mesh.RemoveTrianglesByMask(drop);
-  mesh.RemoveUnreferencedVertices();
+int find_root(std::vector<int>& parent, int v) {
+  while (parent[v] != v) v = parent[v] = parent[parent[v]];
+  return v;
+}
+
+// Removes connected pieces (faces joined through shared vertices) with fewer than min_faces faces,
+// never the largest piece.
+void drop_crumbs(Mesh& mesh, int min_faces) {
+  std::vector<int> parent(mesh.positions.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  for (const Vec3i& f : mesh.faces)
+    for (int k = 1; k < 3; ++k) parent[find_root(parent, f[k])] = find_root(parent, f[0]);
+  std::vector<size_t> piece_faces(mesh.positions.size(), 0);
+  for (const Vec3i& f : mesh.faces) ++piece_faces[find_root(parent, f[0])];
+  const size_t largest = size_t(std::max_element(piece_faces.begin(), piece_faces.end()) - piece_faces.begin());
+  std::erase_if(mesh.faces, [&](const Vec3i& f) {
+    const size_t piece = size_t(find_root(parent, f[0]));
+    return piece != largest && piece_faces[piece] < size_t(std::max(min_faces, 0));
+  });
+  // Drop the vertices no face uses any more.
+  std::vector<int> new_index(mesh.positions.size(), -1);
+  for (const Vec3i& f : mesh.faces)
+    for (int k = 0; k < 3; ++k) new_index[f[k]] = 0;
+  std::vector<Vec3f> kept;
+  for (size_t v = 0; v < new_index.size(); ++v)
+    if (new_index[v] == 0) new_index[v] = int(kept.size()), kept.push_back(mesh.positions[v]);
+  mesh.positions = std::move(kept);
+  for (Vec3i& f : mesh.faces)
+    for (int k = 0; k < 3; ++k) f[k] = new_index[f[k]];
+}
+
+double signed_volume(const Mesh& mesh) {
+  double v = 0.0;
+  for (const Vec3i& f : mesh.faces)
+    v += mesh.positions[f[0]].cast<double>().dot(
+        mesh.positions[f[1]].cast<double>().cross(mesh.positions[f[2]].cast<double>()));
+  return v / 6.0;
 }
 
 }  // namespace
@@ -67,10 +95,11 @@ Mesh smooth_and_subdivide(const Mesh& input, const SurfaceCleanupOptions& option
   smooth_uniform_laplacian(smoothed, options.smooth_iterations);
 
   // Loop subdivision needs a manifold (pymeshlab repairs non-manifold vertices and edges here too).
-  repair_to_closed_manifold(smoothed);
-  auto o3d = to_open3d(smoothed);
-  drop_crumbs(*o3d, options.min_component_faces);
-  Mesh mesh = from_open3d(*o3d);
+  // The optimisation stages already deliver one, outward: then the (Open3D, hash-map) repair is skipped.
+  if (!closed_manifold_problem(smoothed.faces, smoothed.positions.size()).empty() || signed_volume(smoothed) <= 0.0)
+    repair_to_closed_manifold(smoothed);
+  drop_crumbs(smoothed, options.min_component_faces);
+  Mesh mesh = std::move(smoothed);
   const BoundingBox box = bounding_box(mesh.positions);
   const double threshold = options.subdivision_threshold * double(box.extent().norm());
   for (int it = 0; it < options.subdivision_iterations && mean_edge_length(mesh) > threshold &&

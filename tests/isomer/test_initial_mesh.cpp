@@ -5,6 +5,8 @@
 
 #include "isomer/initial_mesh.h"
 #include "isomer/mesh_topology.h"
+#include "isomer/remesh/manifold_check.h"
+#include "isomer/view_set.h"
 #include "synthetic_views.h"
 
 namespace u3d {
@@ -52,6 +54,15 @@ TEST(InitialMesh, SphereIsClosedManifoldAndClose) {
   const double cd = chamfer_to_sphere(mesh, radius);
   std::printf("sphere init: Chamfer distance %.4f (radius %.2f)\n", cd, radius);
   EXPECT_LT(cd, 0.02);  // 3.3% of the radius
+}
+
+// The bundled example's initial mesh: Poisson + decimation + removal of non-manifold edges opened
+// holes there; the optimisation's culling renderer needs every edge paired with its reverse.
+TEST(InitialMesh, BundledExampleIsClosedAndConsistentlyOriented) {
+  const ViewSet views = load_view_set(std::string(UNIQUE3D_SOURCE_DIR) + "/examples/spot/views");
+  const Mesh mesh = build_initial_mesh(views);
+  EXPECT_EQ(closed_manifold_problem(mesh.faces, mesh.positions.size()), "");
+  EXPECT_GT(mesh_topology(mesh).volume, 0.0);
 }
 
 }  // namespace
