@@ -32,6 +32,10 @@ struct Candidate {
   bool operator>(const Candidate& o) const { return cost > o.cost; }
 };
 
+// Flat regions collapse at no cost and would otherwise gather into fans of hundreds of slivers
+// around one vertex (slow to update, and poor triangles for the stages after).
+constexpr size_t kMaxValence = 16;
+
 // A face whose normal turns by more than this (cosine) or whose area drops to ~0 blocks a collapse.
 constexpr double kMinNormalCosine = 0.2;
 constexpr double kMinAreaRatio = 1e-6;
@@ -177,6 +181,7 @@ class Decimator {
           return;  // the opposite vertex would be left with two faces
       }
     if (keep_ring_.size() <= 3 && remove_ring_.size() <= 3) return;  // a tetrahedron: keep it whole
+    if (keep_ring_.size() + remove_ring_.size() - 4 > kMaxValence) return;  // merged ring: both lose 2
     Vec3d around = Vec3d::Zero();
     for (int f : keep_faces_) around += area_vector(f);
     for (int f : remove_faces_)

@@ -109,7 +109,8 @@ TEST(ReconstructCli, VisualHullReplacesInitialMeshAndOptimisation) {
   testing::write_view_set(testing::sphere_views(0.6f, 96), dir / "views");
   const std::string views = (dir / "views").string();
   const auto out = dir / "hull.glb";
-  const CliResult hull = run_cli(views + " -o " + out.string() + " --visual-hull --hull-resolution 64", dir / "hull.txt");
+  const CliResult hull = run_cli(views + " -o " + out.string() + " --visual-hull --hull-resolution 64 --subdivide 0",
+                                 dir / "hull.txt");
   ASSERT_EQ(hull.status, 0) << hull.output;
   EXPECT_NE(hull.output.find(", visual hull "), std::string::npos) << hull.output;
   for (const char* stage : {", initial mesh ", ", coarse ", ", refine "})

@@ -3,6 +3,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <algorithm>
 #include <array>
 #include <map>
 
@@ -76,6 +77,20 @@ TEST(QuadricDecimation, FlatSidesCollapseCornersStay) {
   EXPECT_LE(small.face_count(), 40u);
   EXPECT_NEAR(mesh_topology(small).volume, 1.0, 1e-4);
   for (const Vec3f& p : small.positions) EXPECT_NEAR(p.cwiseAbs().maxCoeff(), 0.5f, 1e-5f);
+}
+
+// Zero-cost collapses on a flat side must not pile up into one fan: every vertex keeps at most 16
+// neighbours (the input's are at most 6), and the volume is exact on the way down.
+TEST(QuadricDecimation, FlatSidesDoNotBecomeFans) {
+  const Mesh cube = gridded_cube(40);  // 19,200 faces
+  const Mesh small = decimate_closed_mesh(cube, 2000);
+  EXPECT_EQ(small.face_count(), 2000u);
+  EXPECT_TRUE(consistently_oriented_and_closed(small));
+  EXPECT_NEAR(mesh_topology(small).volume, 1.0, 1e-4);
+  std::vector<int> valence(small.vertex_count(), 0);
+  for (const Vec3i& f : small.faces)
+    for (int k = 0; k < 3; ++k) ++valence[f[k]];  // closed manifold: faces around a vertex = neighbours
+  EXPECT_LE(*std::max_element(valence.begin(), valence.end()), 16);
 }
 
 TEST(QuadricDecimation, TargetAboveFaceCountChangesNothing) {
