@@ -4,10 +4,9 @@
 #include <benchmark/benchmark.h>
 #include <torch/torch.h>
 
-#include <thread>
-
 #include "nn/config_json.h"
 #include "nn/layers.h"
+#include "nn/runtime.h"
 #include "nn/unet.h"
 
 namespace {
@@ -56,7 +55,7 @@ BENCHMARK(BM_UNetForward)
 }  // namespace
 
 int main(int argc, char** argv) {
-  at::set_num_threads(static_cast<int>(std::thread::hardware_concurrency()));
+  u3d::nn::configure_torch_threads();  // every core, and libtorch's fastest kernels (as the CLI sets up)
   // Random weights can drive values into denormals, which would measure the FPU's slow path.
   at::globalContext().setFlushDenormal(true);
   benchmark::Initialize(&argc, argv);
