@@ -1,6 +1,9 @@
 // Full-size sd-image-variations UNet forward (860M parameters, random weights), fp32 on the CPU with
 // every core: batch 8 at 32x32 latents and batch 2 at 64x64. Reports the median of a few runs (wall time)
 // and the process CPU time of all threads.
+// On a shared machine, OMP_WAIT_POLICY=PASSIVE stops libgomp's idle workers from spinning against
+// OpenBLAS's own threads (measured: batch 2 at 64x64, 48 s -> 38 s CPU). libgomp reads it at load
+// time, so it can only be set in the environment, not from the program.
 #include <benchmark/benchmark.h>
 #include <torch/torch.h>
 
