@@ -10,6 +10,10 @@
 #include "core/progress.h"
 #include "unique3d/version.h"
 
+#ifdef UNIQUE3D_WITH_TORCH
+#include "nn/runtime.h"
+#endif
+
 namespace u3d::cli {
 
 std::vector<CommandInfo>& command_registry() {
@@ -41,6 +45,9 @@ int main(int argc, char** argv) {
   }
   set_progress_quiet(quiet);
   configure_threads(threads);
+#ifdef UNIQUE3D_WITH_TORCH
+  nn::configure_torch_threads(threads);  // the networks use the same count as our OpenMP loops
+#endif
   try {
     for (auto& [sub, action] : actions)
       if (sub->parsed()) action();

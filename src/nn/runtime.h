@@ -1,10 +1,14 @@
 #pragma once
-// libtorch thread setup. The Debian libtorch starts with a single intra-op thread on this kind of
-// machine, which makes the networks several times slower than they need to be.
+// libtorch runtime setup. The Debian libtorch starts with a single intra-op thread on this kind of
+// machine, and picks its AVX2 kernels even on AVX-512 CPUs; both make the networks slower than they
+// need to be.
 namespace u3d::nn {
 
 // Applies `threads` (<= 0: u3d::default_thread_count()) to libtorch's intra-op pool, and to the
 // inter-op pool the first time it is called (libtorch refuses to resize that pool once it is used).
+// The first call also asks libtorch for its AVX-512 kernels (ATEN_CPU_CAPABILITY=avx512, unless the
+// user set that variable; libtorch falls back by itself on CPUs without AVX-512). libtorch fixes its
+// kernel choice at its first operation, so call this before running any network.
 // Returns the intra-op thread count now in effect.
 int configure_torch_threads(int threads = 0);
 

@@ -1,5 +1,7 @@
 #include "nn/vae.h"
 
+#include <algorithm>
+
 #include "core/error.h"
 #include "nn/config_json.h"
 
@@ -34,6 +36,14 @@ AutoencoderKLConfig AutoencoderKLConfig::from_json(const nlohmann::json& json, c
   c.latent_channels = r.get_int("latent_channels", 4);
   c.norm_num_groups = r.get_int("norm_num_groups", 32);
   c.scaling_factor = r.get_double("scaling_factor", 0.18215);
+  if (r.has("sample_size") && json.at("sample_size").is_array()) {  // [h, w]: diffusers tiles by the first
+    const auto sizes = r.get_int_list("sample_size");
+    if (sizes.empty()) r.unsupported("sample_size", "an empty list");
+    c.sample_size = sizes.front();
+  } else {
+    c.sample_size = r.get_int("sample_size", 32);
+  }
+  if (c.sample_size < c.scale_factor()) r.unsupported("sample_size", "smaller than one latent pixel");
   return c;
 }
 
@@ -147,6 +157,52 @@ torch::Tensor VaeDecoderImpl::forward(const torch::Tensor& latent) {
   return conv_out->forward(torch::silu(conv_norm_out->forward(h)));
 }
 
+namespace {
+
+// Cross-fades the start of `tile` along `dim` from the end of its already blended neighbour `before`:
+// over the shared band of e pixels the weight of `tile` rises linearly 0, 1/e, ..., (e-1)/e.
+void blend_into(const torch::Tensor& before, torch::Tensor& tile, int64_t dim, int64_t band) {
+  const int64_t e = std::min({before.size(dim), tile.size(dim), band});
+  if (e <= 0) return;
+  std::vector<int64_t> shape(tile.dim(), 1);
+  shape[dim] = e;
+  const torch::Tensor ramp = (torch::arange(e, tile.options()) / static_cast<double>(e)).reshape(shape);
+  torch::Tensor head = tile.narrow(dim, 0, e);
+  head.copy_(before.narrow(dim, before.size(dim) - e, e) * (1.0 - ramp) + head * ramp);
+}
+
+}  // namespace
+
+torch::Tensor decode_in_tiles(const torch::Tensor& latent, const VaeTiling& tiling, int64_t scale,
+                              const std::function<torch::Tensor(const torch::Tensor&)>& decode_tile) {
+  const int64_t tile = tiling.tile_latent;
+  if (tile < 1 || !(tiling.overlap >= 0.0 && tiling.overlap <= 0.5) || scale < 1)
+    throw Error("VAE tiled decode: tile_latent must be >= 1 and overlap in [0, 0.5], got tile " +
+                std::to_string(tile) + ", overlap " + std::to_string(tiling.overlap));
+  if (latent.dim() != 4) throw Error("VAE tiled decode: latent must be [N, C, h, w], got " + c10::str(latent.sizes()));
+  const int64_t h = latent.size(2), w = latent.size(3);
+  if (h <= tile && w <= tile) return decode_tile(latent);
+  // Truncated as diffusers does; the kept part of a tile is exactly one stride of image pixels, and the
+  // rest of it is the band the next tile blends over. overlap <= 0.5 keeps a tile's two bands disjoint.
+  const int64_t stride = std::max<int64_t>(1, static_cast<int64_t>(tile * (1.0 - tiling.overlap)));
+  const int64_t keep = stride * scale, band = (tile - stride) * scale;
+
+  std::vector<torch::Tensor> rows, above;  // `above`: the blended, uncropped tiles of the previous row
+  for (int64_t y = 0; y < h; y += stride) {
+    std::vector<torch::Tensor> current, kept;
+    for (int64_t x = 0; x < w; x += stride) {
+      torch::Tensor t = decode_tile(latent.narrow(2, y, std::min(tile, h - y)).narrow(3, x, std::min(tile, w - x)));
+      if (!above.empty()) blend_into(above[current.size()], t, 2, band);
+      if (!current.empty()) blend_into(current.back(), t, 3, band);
+      kept.push_back(t.narrow(2, 0, std::min(keep, t.size(2))).narrow(3, 0, std::min(keep, t.size(3))));
+      current.push_back(t);
+    }
+    rows.push_back(torch::cat(kept, 3));
+    above = std::move(current);
+  }
+  return torch::cat(rows, 2);
+}
+
 AutoencoderKLImpl::AutoencoderKLImpl(const AutoencoderKLConfig& c, const torch::TensorOptions& t) : config(c) {
   encoder = register_module("encoder", VaeEncoder(c, t));
   decoder = register_module("decoder", VaeDecoder(c, t));
@@ -155,7 +211,7 @@ AutoencoderKLImpl::AutoencoderKLImpl(const AutoencoderKLConfig& c, const torch::
 }
 
 LatentDistribution AutoencoderKLImpl::encode(const torch::Tensor& image) {
-  const int64_t factor = int64_t{1} << (config.block_out_channels.size() - 1);
+  const int64_t factor = config.scale_factor();
   if (image.dim() != 4 || image.size(1) != config.in_channels || image.size(2) % factor || image.size(3) % factor)
     throw Error("VAE encode: image must be [N, " + std::to_string(config.in_channels) + ", H, W] with H, W multiples of " +
                 std::to_string(factor) + ", got " + c10::str(image.sizes()));
@@ -168,6 +224,14 @@ torch::Tensor AutoencoderKLImpl::decode(const torch::Tensor& latent) {
     throw Error("VAE decode: latent must be [N, " + std::to_string(config.latent_channels) + ", h, w], got " +
                 c10::str(latent.sizes()));
   return decoder->forward(post_quant_conv->forward(latent));
+}
+
+torch::Tensor AutoencoderKLImpl::decode_tiled(const torch::Tensor& latent, const VaeTiling& tiling) {
+  return decode_in_tiles(latent, tiling, config.scale_factor(), [this](const torch::Tensor& t) { return decode(t); });
+}
+
+VaeTiling AutoencoderKLImpl::default_tiling() const {
+  return VaeTiling{config.sample_size / config.scale_factor(), 0.25};
 }
 
 }  // namespace u3d::nn

@@ -1,6 +1,7 @@
 #pragma once
 // diffusers AutoencoderKL (SD 1.x VAE: DownEncoderBlock2D / UpDecoderBlock2D, mid block with one
 // single-head attention), built from its config.json with diffusers' parameter names.
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <torch/torch.h>
@@ -21,6 +22,10 @@ struct AutoencoderKLConfig {
   int64_t latent_channels = 4;
   int64_t norm_num_groups = 32;
   double scaling_factor = 0.18215;
+  int64_t sample_size = 32;  // image side the VAE was trained at; sets diffusers' default decode tile
+
+  // Factor between image and latent sides: 2^(blocks - 1) (8 for the SD VAE).
+  int64_t scale_factor() const { return int64_t{1} << (block_out_channels.size() - 1); }
 
   static AutoencoderKLConfig from_json(const nlohmann::json& json, const std::string& source);
 };
@@ -82,6 +87,28 @@ struct LatentDistribution {
   const torch::Tensor& mode() const { return mean; }
 };
 
+// Tiled decoding, as diffusers' AutoencoderKL.enable_tiling(): the latent is cut into square tiles with
+// neighbours sharing `overlap` of a tile, each tile is decoded on its own, and each tile cross-fades
+// linearly into its upper and left neighbours over the shared band before being cropped to its stride.
+// Why: the decoder's activations grow with the pixel count. For the SD VAE at a 64x64 latent (512² image)
+// the last up block works on 256- and 128-channel maps at 512², 128-256 MiB each in fp32 with several
+// alive at once (about 1 GiB peak); a 2048² image needs 16 times that, and its mid-block attention runs
+// over 16 times as many tokens. Decoding in tiles bounds the peak by one tile's decode plus the decoded
+// (3-channel) tiles of two tile rows and the output, whatever the image size. The price: GroupNorm
+// statistics and the mid-block attention see one tile instead of the whole image, so the result is
+// close to, not equal to, the plain decode.
+struct VaeTiling {
+  int64_t tile_latent = 64;  // tile side in latent pixels (diffusers: sample_size / scale_factor)
+  double overlap = 0.25;     // fraction of a tile shared with the next one (diffusers' tile_overlap_factor), <= 0.5
+};
+
+// Decodes `latent` [N, C, h, w] with `decode_tile` (a latent tile -> its image, `scale` times larger) in
+// overlapping tiles; a latent that fits in one tile is decoded whole. Tiles start every
+// floor(tile_latent·(1 - overlap)) latent pixels, and the blend band is the decoded overlap; for the
+// diffusers defaults (tile 64, overlap 0.25) this is diffusers' tiled_decode. The result is [N, ·, h·scale, w·scale].
+torch::Tensor decode_in_tiles(const torch::Tensor& latent, const VaeTiling& tiling, int64_t scale,
+                              const std::function<torch::Tensor(const torch::Tensor&)>& decode_tile);
+
 class AutoencoderKLImpl : public torch::nn::Module {
  public:
   AutoencoderKLImpl(const AutoencoderKLConfig& config, const torch::TensorOptions& options);
@@ -90,6 +117,10 @@ class AutoencoderKLImpl : public torch::nn::Module {
   LatentDistribution encode(const torch::Tensor& image);
   // latent [N, latent_channels, h, w] (unscaled: divide by scaling_factor first) -> image, about [-1, 1].
   torch::Tensor decode(const torch::Tensor& latent);
+  // decode() in tiles (see VaeTiling); equal to decode() when the latent fits in one tile.
+  torch::Tensor decode_tiled(const torch::Tensor& latent, const VaeTiling& tiling);
+  // diffusers' tiling for this VAE: tiles of sample_size / scale_factor latent pixels, overlap 0.25.
+  VaeTiling default_tiling() const;
 
   AutoencoderKLConfig config;
   VaeEncoder encoder{nullptr};

@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "nn/config_json.h"
 #include "nn/safetensors.h"
+#include "nn/state_dict_loader.h"
 #include "nn/tensor_map.h"
 
 namespace u3d::nn::test {
@@ -26,18 +27,11 @@ inline nlohmann::json golden_config(const std::string& case_name, const std::str
   return read_json_file(golden_dir(case_name) / file);
 }
 
-// Copies each tensor of `weights` into the module's parameter of the same name. Every parameter must
-// be covered and every tensor used, with equal shapes. (Test-local stand-in for the strict loader.)
-inline void load_weights_strict(torch::nn::Module& module, const TensorMap& weights) {
-  torch::NoGradGuard no_grad;
-  auto params = module.named_parameters(true);
-  for (const auto& [name, tensor] : weights) {
-    torch::Tensor* p = params.find(name);
-    ASSERT_NE(p, nullptr) << "checkpoint key without parameter: " << name;
-    ASSERT_EQ(p->sizes(), tensor.sizes()) << name;
-    p->copy_(tensor);
-  }
-  for (const auto& item : params) ASSERT_TRUE(weights.count(item.key())) << "parameter not in checkpoint: " << item.key();
+// Loads <case>/weights.safetensors into `module` with the library's strict loader (nn::load_state_dict):
+// every parameter and buffer covered, every tensor used, equal shapes; only `policy` relaxes that.
+inline LoadReport load_golden_weights(torch::nn::Module& module, const std::string& case_name,
+                                      const LoadPolicy& policy = {}) {
+  return load_state_dict(module, golden_tensors(case_name, "weights"), policy, case_name + "/weights.safetensors");
 }
 
 inline double max_abs_diff(const torch::Tensor& a, const torch::Tensor& b) {

@@ -14,7 +14,7 @@ class UNetBase : public ::testing::Test {
   void SetUp() override {
     auto config = UNetConfig::from_json(golden_config("unet_base"), "unet_base/config.json");
     unet = UNet2DConditionModel(config, torch::TensorOptions());
-    load_weights_strict(*unet, golden_tensors("unet_base", "weights"));
+    load_golden_weights(*unet, "unet_base");
     in = golden_tensors("unet_base", "inputs");
     ref = golden_tensors("unet_base", "outputs");
   }
@@ -74,7 +74,7 @@ TEST(UNetDtype, Float64Forward) {
   torch::NoGradGuard no_grad;
   auto config = UNetConfig::from_json(golden_config("unet_base"), "unet_base/config.json");
   UNet2DConditionModel unet(config, torch::TensorOptions().dtype(torch::kDouble));
-  load_weights_strict(*unet, golden_tensors("unet_base", "weights"));
+  load_golden_weights(*unet, "unet_base");
   EXPECT_EQ(unet->conv_in->weight.scalar_type(), torch::kDouble);
   auto in = golden_tensors("unet_base", "inputs");
   auto ref = golden_tensors("unet_base", "outputs");

@@ -16,7 +16,7 @@ TEST(UNetMultiView, MatchesUnique3DForward) {
   auto config = UNetConfig::from_json(golden_config("unet_mv"), "unet_mv/config.json");
   EXPECT_EQ(config.num_class_embeds, 8);
   UNet2DConditionModel unet(config, torch::TensorOptions());
-  load_weights_strict(*unet, golden_tensors("unet_mv", "weights"));
+  load_golden_weights(*unet, "unet_mv");
   auto in = golden_tensors("unet_mv", "inputs");
   auto ref = golden_tensors("unet_mv", "outputs");
 
