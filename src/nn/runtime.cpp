@@ -9,10 +9,17 @@
 
 namespace u3d::nn {
 
+bool cpu_runs_avx512_kernels() {
+  // What ATen's AVX-512 kernels are compiled for (its own detection in later versions checks these).
+  return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+         __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("fma");
+}
+
 int configure_torch_threads(int threads) {
   // libtorch 1.13 uses AVX2 kernels unless told otherwise. With AVX-512 the full UNet took about 15%
-  // less CPU time here (bench_unet); overwrite=0 keeps a user's own choice.
-  setenv("ATEN_CPU_CAPABILITY", "avx512", 0);
+  // less CPU time here (bench_unet); overwrite=0 keeps a user's own choice. ATen 1.13 takes the
+  // variable on trust, so it is only set where the CPU has the instructions (else: SIGILL).
+  if (cpu_runs_avx512_kernels()) setenv("ATEN_CPU_CAPABILITY", "avx512", 0);
   if (threads <= 0) threads = default_thread_count();
   at::set_num_threads(threads);
   // The inter-op pool can only be sized before its first use; later calls keep the first size.

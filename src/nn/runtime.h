@@ -6,10 +6,13 @@ namespace u3d::nn {
 
 // Applies `threads` (<= 0: u3d::default_thread_count()) to libtorch's intra-op pool, and to the
 // inter-op pool the first time it is called (libtorch refuses to resize that pool once it is used).
-// The first call also asks libtorch for its AVX-512 kernels (ATEN_CPU_CAPABILITY=avx512, unless the
-// user set that variable; libtorch falls back by itself on CPUs without AVX-512). libtorch fixes its
-// kernel choice at its first operation, so call this before running any network.
+// It also asks libtorch for its AVX-512 kernels (ATEN_CPU_CAPABILITY=avx512) when the CPU has them
+// and the user did not set that variable; libtorch 1.13 would not check the CPU itself. libtorch fixes
+// its kernel choice at its first operation, so call this before running any network.
 // Returns the intra-op thread count now in effect.
 int configure_torch_threads(int threads = 0);
+
+// Whether this CPU has the instruction sets ATen's AVX-512 kernels use.
+bool cpu_runs_avx512_kernels();
 
 }  // namespace u3d::nn
