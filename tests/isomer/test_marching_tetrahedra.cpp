@@ -6,11 +6,15 @@
 #include <map>
 
 #include "core/error.h"
+#include "isomer/remesh/manifold_check.h"
 #include "isomer/marching_tetrahedra.h"
 #include "isomer/mesh_topology.h"
 
 namespace u3d {
 namespace {
+
+// Every edge used once in each direction, every vertex a single fan.
+bool closed_and_oriented(const Mesh& m) { return closed_manifold_problem(m.faces, m.positions.size()).empty(); }
 
 // Samples f over [-1, 1]^3 with n samples per axis.
 ScalarGrid sampled(int n, const std::function<float(const Vec3f&)>& f) {
@@ -25,24 +29,12 @@ ScalarGrid sampled(int n, const std::function<float(const Vec3f&)>& f) {
   return g;
 }
 
-// Every directed edge exactly once and its reverse exactly once: closed and consistently oriented.
-bool consistently_oriented_and_closed(const Mesh& mesh) {
-  std::map<std::pair<int, int>, int> directed;
-  for (const Vec3i& f : mesh.faces)
-    for (int k = 0; k < 3; ++k) ++directed[{f[k], f[(k + 1) % 3]}];
-  for (const auto& [edge, count] : directed) {
-    auto reverse = directed.find({edge.second, edge.first});
-    if (count != 1 || reverse == directed.end() || reverse->second != 1) return false;
-  }
-  return true;
-}
-
 TEST(MarchingTetrahedra, SphereIsClosedOutwardAndOnTheLevelSet) {
   const float r = 0.7f;
   const ScalarGrid grid = sampled(48, [&](const Vec3f& p) { return r - p.norm(); });
   const Mesh mesh = extract_zero_surface(grid);
   ASSERT_FALSE(mesh.faces.empty());
-  EXPECT_TRUE(consistently_oriented_and_closed(mesh));
+  EXPECT_TRUE(closed_and_oriented(mesh));
   const MeshTopology topo = mesh_topology(mesh);
   EXPECT_TRUE(topo.closed_manifold()) << topo.summary();
   EXPECT_EQ(topo.components, 1);
@@ -61,7 +53,7 @@ TEST(MarchingTetrahedra, TorusKeepsItsHole) {
     return 0.25f - std::hypot(ring, p.y());
   });
   const Mesh mesh = extract_zero_surface(grid);
-  EXPECT_TRUE(consistently_oriented_and_closed(mesh));
+  EXPECT_TRUE(closed_and_oriented(mesh));
   const MeshTopology topo = mesh_topology(mesh);
   EXPECT_TRUE(topo.closed_manifold()) << topo.summary();
   EXPECT_EQ(topo.euler_characteristic, 0);  // genus 1
@@ -72,7 +64,7 @@ TEST(MarchingTetrahedra, SamplesExactlyZeroCountAsOutside) {
   // A field that is 0 on whole grid planes: the surface still closes and has no coincident vertices.
   ScalarGrid grid = sampled(9, [](const Vec3f& p) { return std::round(4.f * (0.5f - p.cwiseAbs().maxCoeff())) / 4.f; });
   const Mesh mesh = extract_zero_surface(grid);
-  EXPECT_TRUE(consistently_oriented_and_closed(mesh));
+  EXPECT_TRUE(closed_and_oriented(mesh));
   EXPECT_GT(mesh_topology(mesh).volume, 0.0);
   for (size_t i = 0; i < mesh.positions.size(); ++i)
     for (size_t j = i + 1; j < mesh.positions.size(); ++j)

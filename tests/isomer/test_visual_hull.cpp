@@ -6,12 +6,16 @@
 #include <map>
 
 #include "core/error.h"
+#include "isomer/remesh/manifold_check.h"
 #include "isomer/mesh_topology.h"
 #include "isomer/visual_hull.h"
 #include "synthetic_views.h"
 
 namespace u3d {
 namespace {
+
+// Every edge used once in each direction, every vertex a single fan.
+bool closed_and_oriented(const Mesh& m) { return closed_manifold_problem(m.faces, m.positions.size()).empty(); }
 
 // The four exact views of the axis-aligned box [lo, hi]: each view sees the box's face toward it.
 ViewSet box_views(const Vec3f& lo, const Vec3f& hi, int resolution) {
@@ -44,17 +48,6 @@ ViewSet box_views(const Vec3f& lo, const Vec3f& hi, int resolution) {
   return make_view_set(rgb, normal_maps, NormalSpace::World, rgb_names, normal_names);
 }
 
-bool consistently_oriented_and_closed(const Mesh& mesh) {
-  std::map<std::pair<int, int>, int> directed;
-  for (const Vec3i& f : mesh.faces)
-    for (int k = 0; k < 3; ++k) ++directed[{f[k], f[(k + 1) % 3]}];
-  for (const auto& [edge, count] : directed) {
-    auto reverse = directed.find({edge.second, edge.first});
-    if (count != 1 || reverse == directed.end() || reverse->second != 1) return false;
-  }
-  return true;
-}
-
 std::string error_of(const std::function<void()>& f) {
   try {
     f();
@@ -72,7 +65,7 @@ TEST(VisualHull, SphereCarvesToTheBicylinder) {
   const int resolution = 128;
   const float voxel = 2.f / resolution;
   const Mesh hull = carve_visual_hull(views, {resolution, 0});
-  EXPECT_TRUE(consistently_oriented_and_closed(hull));
+  EXPECT_TRUE(closed_and_oriented(hull));
   const MeshTopology topo = mesh_topology(hull);
   EXPECT_TRUE(topo.closed_manifold()) << topo.summary();
   EXPECT_EQ(topo.components, 1);
@@ -93,7 +86,7 @@ TEST(VisualHull, SphereCarvesToTheBicylinder) {
   // Decimated (the default path): still closed and outward, with the same volume.
   const Mesh small = carve_visual_hull(views, {resolution, 5000});
   EXPECT_LE(small.face_count(), 5000u);
-  EXPECT_TRUE(consistently_oriented_and_closed(small));
+  EXPECT_TRUE(closed_and_oriented(small));
   const MeshTopology small_topo = mesh_topology(small);
   EXPECT_TRUE(small_topo.closed_manifold()) << small_topo.summary();
   EXPECT_NEAR(small_topo.volume / exact, 1.0, 0.01);
@@ -106,7 +99,7 @@ TEST(VisualHull, BoxCarvesToTheBox) {
   const int resolution = 128;
   const float voxel = 2.f / resolution;
   const Mesh hull = carve_visual_hull(box_views(lo, hi, 256), {resolution, 0});
-  EXPECT_TRUE(consistently_oriented_and_closed(hull));
+  EXPECT_TRUE(closed_and_oriented(hull));
   const MeshTopology topo = mesh_topology(hull);
   EXPECT_TRUE(topo.closed_manifold()) << topo.summary();
   const double exact = double((hi - lo).prod());
