@@ -5,8 +5,8 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <map>
-#include <tuple>
 #include <set>
+#include <tuple>
 
 #include "isomer/mesh_topology.h"
 #include "isomer/open3d_bridge.h"
@@ -57,10 +57,9 @@ bool fill_boundary_loops(Mesh& mesh, size_t& faces_removed, size_t& holes_filled
 }
 
 // Flips faces so that two faces sharing an edge traverse it in opposite directions: a breadth-first
-// walk over each piece from its first face. Open3D's OrientTriangles runs before the holes are closed
-// and was seen to leave a few faces flipped (19 unpaired edges on Spot's initial mesh); a flipped face
-// has an inward normal and disappears from renders that cull back faces. Edges with more than two
-// faces do not link their faces.
+// walk over each piece from its first face. Open3D's OrientTriangles ran before the holes were filled;
+// this states the guarantee for the final faces, which the back-face-culling renderer relies on (a
+// flipped face would vanish from its views). Edges with more than two faces do not link their faces.
 void orient_consistently(Mesh& mesh) {
   struct Side {
     int lo, hi, face;
