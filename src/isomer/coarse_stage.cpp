@@ -1,12 +1,10 @@
 #include "isomer/coarse_stage.h"
 
-#include "core/error.h"
 #include "core/progress.h"
 #include "isomer/icosphere.h"
 #include "isomer/mesh_optimizer.h"
 #include "isomer/optimisation_loop.h"
 #include "isomer/reconstruction_losses.h"
-#include "isomer/view_resolution.h"
 
 namespace u3d {
 
@@ -26,17 +24,11 @@ StageMesh sphere_initial_mesh() {
 StageMesh run_coarse_stage(const StageMesh& initial, const std::vector<Image>& input_maps,
                            const std::vector<Camera>& input_cameras, const CoarseStageOptions& options,
                            StageReport* report) {
-  require(!input_maps.empty() && input_maps.size() == input_cameras.size(), "coarse stage: one normal map per camera");
-  for (size_t i = 0; i < input_cameras.size(); ++i)
-    require(input_maps[i].width == input_cameras[i].width && input_maps[i].height == input_cameras[i].height,
-            "coarse stage: normal map " + std::to_string(i) + " does not match its camera resolution");
   StageTimer timer("coarse reconstruction");
-  const ViewsAtResolution views = views_at_resolution(input_maps, input_cameras, options.render_resolution);
-  const std::vector<Image>& normal_maps = views.normal_maps;
-  const std::vector<Camera>& cameras = views.cameras;
-  std::vector<NormalTarget> targets;
+  const StageViewTargets views =
+      prepare_stage_views("coarse stage", input_maps, input_cameras, options.render_resolution);
+  const std::vector<NormalTarget>& targets = views.targets;
   std::vector<const Image*> references;
-  for (const Image& map : normal_maps) targets.push_back(make_normal_target(map));
   for (const NormalTarget& t : targets) references.push_back(&t.rgba);
 
   MeshOptimizerOptions opt;
@@ -47,7 +39,7 @@ StageMesh run_coarse_stage(const StageMesh& initial, const std::vector<Image>& i
   opt.local_edge_length = false;
   opt.seed = options.seed;
   MeshOptimizer optimizer(initial.positions, initial.faces, opt);
-  NormalRenderer renderer(cameras);
+  NormalRenderer renderer(views.cameras);
   auto losses = [&](int, const std::vector<Vec3f>& positions, const std::vector<Vec3i>&,
                     const VertexNormals& normals, std::vector<Vec3f>& grad) {
     double loss = masked_image_l2(renderer, references, 4, 1.f);

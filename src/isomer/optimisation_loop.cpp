@@ -2,6 +2,9 @@
 
 #include <chrono>
 
+#include "core/error.h"
+#include "isomer/view_resolution.h"
+
 namespace u3d {
 
 namespace {
@@ -20,6 +23,18 @@ class LapClock {
 };
 
 }  // namespace
+
+StageViewTargets prepare_stage_views(const std::string& stage, const std::vector<Image>& normal_maps,
+                                     const std::vector<Camera>& cameras, int render_resolution) {
+  require(!normal_maps.empty() && normal_maps.size() == cameras.size(), stage + ": one normal map per camera");
+  for (size_t i = 0; i < cameras.size(); ++i)
+    require(normal_maps[i].width == cameras[i].width && normal_maps[i].height == cameras[i].height,
+            stage + ": normal map " + std::to_string(i) + " does not match its camera resolution");
+  ViewsAtResolution views = views_at_resolution(normal_maps, cameras, render_resolution);
+  StageViewTargets out{std::move(views.normal_maps), std::move(views.cameras), {}};
+  for (const Image& map : out.normal_maps) out.targets.push_back(make_normal_target(map));
+  return out;
+}
 
 void run_optimisation_loop(MeshOptimizer& optimizer, NormalRenderer& renderer, int steps, float lr_decay,
                            const StageLosses& losses, StageReport* report) {

@@ -1,27 +1,21 @@
 #include "isomer/refine_stage.h"
 
-#include "core/error.h"
 #include "core/progress.h"
 #include "isomer/mesh_optimizer.h"
 #include "isomer/optimisation_loop.h"
 #include "isomer/reconstruction_losses.h"
-#include "isomer/view_resolution.h"
 
 namespace u3d {
 
 StageMesh run_refine_stage(const StageMesh& coarse, const std::vector<Image>& input_maps,
                            const std::vector<Camera>& input_cameras, const RefineStageOptions& options,
                            StageReport* report) {
-  require(!input_maps.empty() && input_maps.size() == input_cameras.size(), "refine stage: one normal map per camera");
-  for (size_t i = 0; i < input_cameras.size(); ++i)
-    require(input_maps[i].width == input_cameras[i].width && input_maps[i].height == input_cameras[i].height,
-            "refine stage: normal map " + std::to_string(i) + " does not match its camera resolution");
   StageTimer timer("mesh refinement");
-  const ViewsAtResolution views = views_at_resolution(input_maps, input_cameras, options.render_resolution);
+  const StageViewTargets views =
+      prepare_stage_views("refine stage", input_maps, input_cameras, options.render_resolution);
   const std::vector<Image>& normal_maps = views.normal_maps;
   const std::vector<Camera>& cameras = views.cameras;
-  std::vector<NormalTarget> targets;
-  for (const Image& map : normal_maps) targets.push_back(make_normal_target(map));
+  const std::vector<NormalTarget>& targets = views.targets;
 
   MeshOptimizerOptions opt;
   opt.learning_rate = options.learning_rate;
