@@ -11,8 +11,14 @@ namespace {
 
 constexpr int kChannels = 4;
 
+// Four explicit stores per pixel: with the channel count known the compiler writes them directly
+// instead of calling memset for every 16 bytes.
 void zero_pixels(Image& image, const std::vector<int32_t>& pixels) {
-  for (int32_t p : pixels) std::fill_n(image.data.data() + size_t(p) * image.channels, image.channels, 0.f);
+  float* data = image.data.data();
+  for (int32_t p : pixels) {
+    float* px = data + size_t(p) * kChannels;
+    px[0] = px[1] = px[2] = px[3] = 0.f;
+  }
 }
 
 }  // namespace

@@ -1,5 +1,8 @@
 #include "isomer/reconstruct.h"
 
+#include <map>
+#include <optional>
+
 #include "core/error.h"
 #include "core/progress.h"
 #include "isomer/view_resolution.h"
@@ -24,7 +27,9 @@ StageViews stage_views(const ViewSet& views) {
   for (View v : kAllViews) {
     const Image& decoded = views[v].normals;
     Image encoded(decoded.width, decoded.height, 4);
-    for (size_t p = 0; p < decoded.pixel_count(); ++p) {
+    const int64_t pixels = int64_t(decoded.pixel_count());
+#pragma omp parallel for schedule(static) if (pixels > 65536)
+    for (int64_t p = 0; p < pixels; ++p) {
       const float* in = decoded.data.data() + p * 4;
       float* px = encoded.data.data() + p * 4;
       for (int c = 0; c < 3; ++c) px[c] = 0.5f * (in[c] + 1.f);
@@ -79,9 +84,26 @@ ReconstructResult reconstruct(const ViewSet& views, const ReconstructOptions& op
   const char* start = options.visual_hull ? "visual hull" : options.sphere_init ? "sphere" : "initial mesh";
   timed(start, [&] { mesh = stage_initial_mesh(views, options); });
   if (options.run_coarse || options.run_refine) {
-    const StageViews maps = stage_views(views);
-    if (options.run_coarse) timed("coarse", [&] { mesh = stage_coarse(mesh, maps, options, &result.coarse); });
-    if (options.run_refine) timed("refine", [&] { mesh = stage_refine(mesh, maps, options, &result.refine); });
+    // Both stages work below the input resolution (by default both at 512 px): encode the maps and
+    // downsample each working resolution once, inside the first stage's time. At 2048 px input this
+    // saves about half a second per stage.
+    std::optional<StageViews> maps;
+    std::map<int, StageViews> working;
+    auto at_resolution = [&](int resolution) -> const StageViews& {
+      auto it = working.find(resolution);
+      if (it == working.end()) {
+        if (!maps) maps = stage_views(views);
+        ViewsAtResolution v = views_at_resolution(maps->normal_maps, maps->cameras, resolution);
+        it = working.emplace(resolution, StageViews{std::move(v.normal_maps), std::move(v.cameras)}).first;
+      }
+      return it->second;
+    };
+    if (options.run_coarse)
+      timed("coarse", [&] { mesh = stage_coarse(mesh, at_resolution(kCoarseMapResolution), options, &result.coarse); });
+    if (options.run_refine)
+      timed("refine", [&] {
+        mesh = stage_refine(mesh, at_resolution(options.refine.render_resolution), options, &result.refine);
+      });
   }
   timed("smooth and subdivide", [&] { mesh = stage_smooth_and_subdivide(mesh, options); });
   timed("colouring", [&] { result.colouring = stage_colouring(mesh, views, options); });

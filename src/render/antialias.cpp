@@ -21,7 +21,10 @@ EdgeNeighbors edge_neighbors(const std::vector<Vec3i>& faces) {
     for (int i = 0; i < 3; ++i) outgoing[fill[f[i]]++] = {f[(i + 1) % 3], f[(i + 2) % 3]};
   EdgeNeighbors n;
   n.opposite.resize(faces.size());
-  for (size_t fi = 0; fi < faces.size(); ++fi) {
+  const int64_t face_count = int64_t(faces.size());
+  // The lookups are independent: split them over the threads (the renderer calls this every frame).
+#pragma omp parallel for schedule(static) if (face_count > 16384)
+  for (int64_t fi = 0; fi < face_count; ++fi) {
     const Vec3i& f = faces[fi];
     for (int i = 0; i < 3; ++i) {
       // The neighbour traverses this edge the other way round: from f[i + 2] to f[i + 1].

@@ -2,17 +2,24 @@
 
 namespace u3d {
 
-std::vector<int32_t> covered_pixels(const RasterBuffer& raster) {
-  std::vector<int32_t> pixels;
-  const PixelRect& r = raster.footprint;
-  for (int y = r.y0; y <= r.y1; ++y)
-    for (int x = r.x0, p = y * raster.width + r.x0; x <= r.x1; ++x, ++p)
-      if (raster.face_id[p] >= 0) pixels.push_back(p);
-  return pixels;
-}
+namespace {
 
-void interpolate(const RasterBuffer& raster, std::span<const int32_t> pixels, const std::vector<Vec3i>& faces,
-                 const float* attributes, int channels, Image& out) {
+// The loops are written once with the channel count as a template parameter: for the common counts
+// (RGBA, RGB) the compiler unrolls and vectorizes the per-channel work, which a run-time count prevents.
+template <int kFixed>
+struct Channels {
+  int count() const { return kFixed; }
+};
+template <>
+struct Channels<0> {
+  int n;
+  int count() const { return n; }
+};
+
+template <int kFixed>
+void interpolate_pixels(const RasterBuffer& raster, std::span<const int32_t> pixels, const std::vector<Vec3i>& faces,
+                        const float* attributes, Channels<kFixed> ch, Image& out) {
+  const int channels = ch.count();
   for (int32_t p : pixels) {
     const Vec3i& f = faces[raster.face_id[p]];
     const float b1 = raster.bary[p].x(), b2 = raster.bary[p].y(), b0 = 1.f - b1 - b2;
@@ -24,9 +31,11 @@ void interpolate(const RasterBuffer& raster, std::span<const int32_t> pixels, co
   }
 }
 
-void interpolate_backward(const RasterBuffer& raster, std::span<const int32_t> pixels, const std::vector<Vec3i>& faces,
-                          const float* attributes, int channels, const Image& grad_out, float* grad_attributes,
-                          std::vector<Vec2f>* grad_bary) {
+template <int kFixed>
+void interpolate_pixels_backward(const RasterBuffer& raster, std::span<const int32_t> pixels,
+                                 const std::vector<Vec3i>& faces, const float* attributes, Channels<kFixed> ch,
+                                 const Image& grad_out, float* grad_attributes, std::vector<Vec2f>* grad_bary) {
+  const int channels = ch.count();
   for (int32_t p : pixels) {
     const Vec3i& f = faces[raster.face_id[p]];
     const float b1 = raster.bary[p].x(), b2 = raster.bary[p].y(), b0 = 1.f - b1 - b2;
@@ -47,6 +56,42 @@ void interpolate_backward(const RasterBuffer& raster, std::span<const int32_t> p
       db2 += g[c] * (a2[c] - a0[c]);
     }
     if (grad_bary) (*grad_bary)[p] = {db1, db2};
+  }
+}
+
+}  // namespace
+
+std::vector<int32_t> covered_pixels(const RasterBuffer& raster) {
+  std::vector<int32_t> pixels;
+  const PixelRect& r = raster.footprint;
+  for (int y = r.y0; y <= r.y1; ++y)
+    for (int x = r.x0, p = y * raster.width + r.x0; x <= r.x1; ++x, ++p)
+      if (raster.face_id[p] >= 0) pixels.push_back(p);
+  return pixels;
+}
+
+void interpolate(const RasterBuffer& raster, std::span<const int32_t> pixels, const std::vector<Vec3i>& faces,
+                 const float* attributes, int channels, Image& out) {
+  switch (channels) {
+    case 4: return interpolate_pixels(raster, pixels, faces, attributes, Channels<4>{}, out);
+    case 3: return interpolate_pixels(raster, pixels, faces, attributes, Channels<3>{}, out);
+    default: return interpolate_pixels(raster, pixels, faces, attributes, Channels<0>{channels}, out);
+  }
+}
+
+void interpolate_backward(const RasterBuffer& raster, std::span<const int32_t> pixels, const std::vector<Vec3i>& faces,
+                          const float* attributes, int channels, const Image& grad_out, float* grad_attributes,
+                          std::vector<Vec2f>* grad_bary) {
+  switch (channels) {
+    case 4:
+      return interpolate_pixels_backward(raster, pixels, faces, attributes, Channels<4>{}, grad_out, grad_attributes,
+                                         grad_bary);
+    case 3:
+      return interpolate_pixels_backward(raster, pixels, faces, attributes, Channels<3>{}, grad_out, grad_attributes,
+                                         grad_bary);
+    default:
+      return interpolate_pixels_backward(raster, pixels, faces, attributes, Channels<0>{channels}, grad_out,
+                                         grad_attributes, grad_bary);
   }
 }
 
