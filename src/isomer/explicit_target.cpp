@@ -24,19 +24,23 @@ Vec4f sample_rgba(const Image& image, float px, float py) {
   return out;
 }
 
-// Binary alpha (>= 0.5) eroded by `radius` pixels (square structuring element).
+// Binary alpha (>= 0.5) eroded by `radius` pixels (square structuring element). Rows in parallel: at
+// 2048 px this is 4M pixels a view.
 Image eroded_mask_copy(const Image& rgba, int radius) {
   Image out = rgba;
   const int w = rgba.width, h = rgba.height;
+  const float* in = rgba.data.data();
+  auto foreground = [&](int x, int y) { return is_foreground(in[(size_t(y) * w + x) * 4 + 3]); };
+#pragma omp parallel for schedule(static)
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
-      bool keep = is_foreground(rgba.at(x, y, 3));
+      bool keep = foreground(x, y);
       for (int dy = -radius; dy <= radius && keep; ++dy)
         for (int dx = -radius; dx <= radius && keep; ++dx) {
           const int xx = x + dx, yy = y + dy;
-          keep = xx >= 0 && yy >= 0 && xx < w && yy < h && is_foreground(rgba.at(xx, yy, 3));
+          keep = xx >= 0 && yy >= 0 && xx < w && yy < h && foreground(xx, yy);
         }
-      out.at(x, y, 3) = keep ? 1.f : 0.f;
+      out.data[(size_t(y) * w + x) * 4 + 3] = keep ? 1.f : 0.f;
     }
   return out;
 }

@@ -60,11 +60,11 @@ void NormalRenderer::render(const std::vector<Vec3f>& positions, const std::vect
     zero_pixels(v.grad_image, v.active);
     rasterize_into(positions, faces, v.camera, v.raster, RasterOptions{.cull_backfaces = true});
     v.projection = project_to_screen(positions, v.camera);
-    v.covered = covered_pixels(v.raster);
+    covered_pixels(v.raster, v.covered);
     interpolate(v.raster, v.covered, faces, attributes_.data(), kChannels, v.color);
     for (int32_t p : v.covered)
       std::copy_n(v.color.data.data() + size_t(p) * kChannels, kChannels, v.image.data.data() + size_t(p) * kChannels);
-    v.pairs = find_antialias_pairs(v.raster, faces, neighbors_, v.projection);
+    find_antialias_pairs(v.raster, faces, neighbors_, v.projection, v.pairs);
     apply_antialias(v.pairs, v.color, v.image);
     // Active = covered pixels plus each uncovered pixel a blend changes (once).
     v.active = v.covered;
@@ -80,13 +80,21 @@ void NormalRenderer::render(const std::vector<Vec3f>& positions, const std::vect
 }
 
 void NormalRenderer::render_attribute(const std::vector<Vec3i>& faces, const std::vector<Vec3f>& unit_vectors,
-                                      size_t view_index, Image& out) const {
+                                      size_t view_index, Image& out) {
   const DifferentiableView& v = views_[view_index];
   const std::vector<float> attributes = normal_color_attributes(unit_vectors);
-  Image color(v.raster.width, v.raster.height, kChannels);
-  interpolate(v.raster, v.covered, faces, attributes.data(), kChannels, color);
-  out = color;
-  apply_antialias(v.pairs, color, out);
+  // Reuse the scratch and `out` when they already have the view's size (the refinement calls this
+  // for every view at every target update).
+  for (Image* image : {&attribute_color_, &out}) {
+    if (image->width == v.raster.width && image->height == v.raster.height && image->channels == kChannels)
+      std::fill(image->data.begin(), image->data.end(), 0.f);
+    else
+      *image = Image(v.raster.width, v.raster.height, kChannels);
+  }
+  interpolate(v.raster, v.covered, faces, attributes.data(), kChannels, attribute_color_);
+  for (int32_t p : v.covered)
+    std::copy_n(attribute_color_.data.data() + size_t(p) * kChannels, kChannels, out.data.data() + size_t(p) * kChannels);
+  apply_antialias(v.pairs, attribute_color_, out);
 }
 
 void NormalRenderer::backward(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& faces,

@@ -57,7 +57,7 @@ class NormalRenderer {
   // Renders other per-vertex unit vectors with the current views' rasters and anti-aliasing (no
   // gradient): the refinement stage's target images. `out` gets full-size RGBA images.
   void render_attribute(const std::vector<Vec3i>& faces, const std::vector<Vec3f>& unit_vectors, size_t view_index,
-                        Image& out) const;
+                        Image& out);
 
   // Adds dL/d(positions) for the views' grad_image (set on active pixels by the losses).
   void backward(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& faces, const VertexNormals& normals,
@@ -67,6 +67,7 @@ class NormalRenderer {
   std::vector<DifferentiableView> views_;
   std::vector<float> attributes_;  // per vertex ((n + 1) / 2, 1)
   EdgeNeighbors neighbors_;
+  Image attribute_color_;  // render_attribute's colour before anti-aliasing
 };
 
 // ((n + 1) / 2, 1) per vertex: the colour and coverage channels the renderer interpolates.

@@ -124,6 +124,13 @@ bool analyse_pair(const RasterBuffer& raster, const std::vector<Vec3i>& faces, c
 std::vector<AntialiasPair> find_antialias_pairs(const RasterBuffer& raster, const std::vector<Vec3i>& faces,
                                                 const EdgeNeighbors& neighbors, const ScreenProjection& projection) {
   std::vector<AntialiasPair> pairs;
+  find_antialias_pairs(raster, faces, neighbors, projection, pairs);
+  return pairs;
+}
+
+void find_antialias_pairs(const RasterBuffer& raster, const std::vector<Vec3i>& faces, const EdgeNeighbors& neighbors,
+                          const ScreenProjection& projection, std::vector<AntialiasPair>& pairs) {
+  pairs.clear();
   const std::vector<uint8_t> silhouette = silhouette_edges(faces, neighbors, projection);
   const int w = raster.width, h = raster.height;
   // Pairs differ in face id, so both pixels are background outside the footprint grown by one pixel.
@@ -140,7 +147,6 @@ std::vector<AntialiasPair> find_antialias_pairs(const RasterBuffer& raster, cons
         pairs.push_back(pair);
     }
   }
-  return pairs;
 }
 
 void apply_antialias(const std::vector<AntialiasPair>& pairs, const Image& color, Image& out) {

@@ -37,6 +37,9 @@ struct AntialiasPair {
 // Finds the silhouette pixel pairs of one rendered view and their blend weights.
 std::vector<AntialiasPair> find_antialias_pairs(const RasterBuffer& raster, const std::vector<Vec3i>& faces,
                                                 const EdgeNeighbors& neighbors, const ScreenProjection& projection);
+// The same into `pairs`, reusing its storage (for frame-by-frame rendering).
+void find_antialias_pairs(const RasterBuffer& raster, const std::vector<Vec3i>& faces, const EdgeNeighbors& neighbors,
+                          const ScreenProjection& projection, std::vector<AntialiasPair>& pairs);
 
 // Forward: out += blend deltas computed from `color`. `out` must hold a copy of `color` on entry and
 // must be a different image (the deltas read unblended colours).

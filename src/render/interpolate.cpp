@@ -63,11 +63,16 @@ void interpolate_pixels_backward(const RasterBuffer& raster, std::span<const int
 
 std::vector<int32_t> covered_pixels(const RasterBuffer& raster) {
   std::vector<int32_t> pixels;
+  covered_pixels(raster, pixels);
+  return pixels;
+}
+
+void covered_pixels(const RasterBuffer& raster, std::vector<int32_t>& pixels) {
+  pixels.clear();
   const PixelRect& r = raster.footprint;
   for (int y = r.y0; y <= r.y1; ++y)
     for (int x = r.x0, p = y * raster.width + r.x0; x <= r.x1; ++x, ++p)
       if (raster.face_id[p] >= 0) pixels.push_back(p);
-  return pixels;
 }
 
 void interpolate(const RasterBuffer& raster, std::span<const int32_t> pixels, const std::vector<Vec3i>& faces,

@@ -13,6 +13,8 @@ namespace u3d {
 
 // Indices of the pixels a triangle covers, in scanline order.
 std::vector<int32_t> covered_pixels(const RasterBuffer& raster);
+// The same into `pixels`, reusing its storage (for frame-by-frame rendering).
+void covered_pixels(const RasterBuffer& raster, std::vector<int32_t>& pixels);
 
 // out(pixel, c) = sum_i b_i * attributes[v_i * channels + c] for every pixel in `pixels` (all covered).
 // `out` must be raster-sized with `channels` channels; other pixels are left untouched.

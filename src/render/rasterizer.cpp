@@ -14,7 +14,6 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <memory>
 
 #include "core/error.h"
 
@@ -286,6 +285,27 @@ inline void draw_in_tile(const ScreenTriangle& t, const CornerBary* clipped_corn
 
 namespace {
 
+// Working storage of one rasterize_into call. Each calling thread keeps its own between calls, so
+// rendering frame after frame allocates (and page-faults) nothing: freeing these megabytes every
+// frame cost more than a tenth of the optimisation loop's time in malloc, memset and page faults.
+// The price is that a thread keeps the storage of the largest mesh it has drawn (64 bytes a face).
+struct RasterScratch {
+  std::vector<uint8_t> outcode;
+  std::vector<ScreenVertex> screen;
+  std::vector<ScreenTriangle> tris;  // chunk c's triangles compacted at the start of its face range
+  std::vector<int64_t> chunk_size;
+  std::vector<std::vector<ScreenTriangle>> clipped;
+  std::vector<std::vector<CornerBary>> clipped_corners;
+  std::vector<ScreenTriangle> extra;
+  std::vector<CornerBary> corners;
+  std::vector<int64_t> extra_begin;
+  std::vector<uint32_t> counts;
+  std::vector<PixelRect> chunk_rect;
+  std::vector<size_t> tile_start;
+  std::vector<size_t> cursor;
+  std::vector<int32_t> bins;
+};
+
 void reset_to_background(RasterBuffer& buf, int width, int height) {
   if (buf.width != width || buf.height != height) {
     buf.width = width;
@@ -343,8 +363,12 @@ void rasterize_into(const std::vector<Vec3f>& positions, const std::vector<Vec3i
     const Vec4f p(positions[i].x(), positions[i].y(), positions[i].z(), 1.f);
     return {world_to_clip * p, depth_row.dot(p), Vec2f::Zero()};
   };
-  std::vector<uint8_t> outcode(nv);
-  std::vector<ScreenVertex> screen(nv);
+  thread_local RasterScratch scratch;
+  // Growing a vector value-initialises only the new elements; every element read below is written first.
+  std::vector<uint8_t>& outcode = scratch.outcode;
+  std::vector<ScreenVertex>& screen = scratch.screen;
+  outcode.resize(size_t(nv));
+  screen.resize(size_t(nv));
 #pragma omp parallel for schedule(static) if (nv > kMinParallelWork)
   for (int64_t i = 0; i < nv; ++i) {
     ClipVertex v = vertex_clip(i);
@@ -357,14 +381,19 @@ void rasterize_into(const std::vector<Vec3f>& positions, const std::vector<Vec3i
   // sub-triangles (up to 7 per face) go to a per-chunk overflow list.
   const int chunks = std::max(1, omp_get_max_threads());
   auto chunk_begin = [](int64_t n, int c, int count) { return n * c / count; };
-  std::unique_ptr<ScreenTriangle[]> tris(new ScreenTriangle[size_t(nf)]);  // deliberately uninitialized
-  std::vector<int64_t> chunk_size(chunks, 0);
-  std::vector<std::vector<ScreenTriangle>> clipped(chunks);
-  std::vector<std::vector<CornerBary>> clipped_corners(chunks);
+  std::vector<ScreenTriangle>& tris = scratch.tris;
+  tris.resize(size_t(nf));
+  std::vector<int64_t>& chunk_size = scratch.chunk_size;
+  chunk_size.assign(size_t(chunks), 0);
+  std::vector<std::vector<ScreenTriangle>>& clipped = scratch.clipped;
+  std::vector<std::vector<CornerBary>>& clipped_corners = scratch.clipped_corners;
+  clipped.resize(size_t(chunks));
+  clipped_corners.resize(size_t(chunks));
+  for (int c = 0; c < chunks; ++c) clipped[size_t(c)].clear(), clipped_corners[size_t(c)].clear();
 #pragma omp parallel if (nf > kMinParallelWork)
   {
     for (int c = omp_get_thread_num(); c < chunks; c += omp_get_num_threads()) {
-      ScreenTriangle* out = tris.get() + chunk_begin(nf, c, chunks);
+      ScreenTriangle* out = tris.data() + chunk_begin(nf, c, chunks);
       int64_t n = 0;
       for (int64_t f = chunk_begin(nf, c, chunks), end = chunk_begin(nf, c + 1, chunks); f < end; ++f) {
         const Vec3i& ids = faces[f];
@@ -385,9 +414,12 @@ void rasterize_into(const std::vector<Vec3f>& positions, const std::vector<Vec3i
     }
   }
   // Clipped triangles get indices nf, nf + 1, ... in chunk order; their corner indices become global.
-  std::vector<ScreenTriangle> extra;
-  std::vector<CornerBary> corners;
-  std::vector<int64_t> extra_begin(chunks + 1, 0);
+  std::vector<ScreenTriangle>& extra = scratch.extra;
+  std::vector<CornerBary>& corners = scratch.corners;
+  std::vector<int64_t>& extra_begin = scratch.extra_begin;
+  extra.clear();
+  corners.clear();
+  extra_begin.assign(size_t(chunks) + 1, 0);
   for (int c = 0; c < chunks; ++c) {
     extra_begin[c] = int64_t(extra.size());
     const int32_t base = int32_t(corners.size());
@@ -396,8 +428,6 @@ void rasterize_into(const std::vector<Vec3f>& positions, const std::vector<Vec3i
     extra.insert(extra.end(), clipped[c].begin(), clipped[c].end());
   }
   extra_begin[chunks] = int64_t(extra.size());
-  clipped.clear();
-  clipped_corners.clear();
   auto triangle = [&](int64_t index) -> const ScreenTriangle& {
     return index < nf ? tris[index] : extra[index - nf];
   };
@@ -412,8 +442,10 @@ void rasterize_into(const std::vector<Vec3f>& positions, const std::vector<Vec3i
   // 3. Binning: count per (chunk, tile), prefix-sum in (tile, chunk) order, fill.
   const int tiles_x = (width + kTileSize - 1) / kTileSize, tiles_y = (height + kTileSize - 1) / kTileSize;
   const size_t tile_count = size_t(tiles_x) * tiles_y;
-  std::vector<uint32_t> counts(size_t(chunks) * tile_count, 0);
-  std::vector<PixelRect> chunk_rect(chunks, PixelRect{width, height, -1, -1});
+  std::vector<uint32_t>& counts = scratch.counts;
+  counts.assign(size_t(chunks) * tile_count, 0);
+  std::vector<PixelRect>& chunk_rect = scratch.chunk_rect;
+  chunk_rect.assign(size_t(chunks), PixelRect{width, height, -1, -1});
   auto for_each_tile_of = [&](const ScreenTriangle& t, auto&& fn) {
     for (int ty = t.py0 >> kTileBits; ty <= (t.py1 >> kTileBits); ++ty)
       for (int tx = t.px0 >> kTileBits; tx <= (t.px1 >> kTileBits); ++tx) fn(size_t(ty) * tiles_x + tx);
@@ -435,8 +467,10 @@ void rasterize_into(const std::vector<Vec3f>& positions, const std::vector<Vec3i
   for (const PixelRect& r : chunk_rect)
     drawn = {std::min(drawn.x0, r.x0), std::min(drawn.y0, r.y0), std::max(drawn.x1, r.x1), std::max(drawn.y1, r.y1)};
   if (drawn.empty()) drawn = PixelRect{};
-  std::vector<size_t> tile_start(tile_count + 1);
-  std::vector<size_t> cursor(size_t(chunks) * tile_count);
+  std::vector<size_t>& tile_start = scratch.tile_start;
+  std::vector<size_t>& cursor = scratch.cursor;
+  tile_start.resize(tile_count + 1);
+  cursor.resize(size_t(chunks) * tile_count);
   size_t total = 0;
   for (size_t tile = 0; tile < tile_count; ++tile) {
     tile_start[tile] = total;
@@ -446,7 +480,8 @@ void rasterize_into(const std::vector<Vec3f>& positions, const std::vector<Vec3i
     }
   }
   tile_start[tile_count] = total;
-  std::vector<int32_t> bins(total);
+  std::vector<int32_t>& bins = scratch.bins;
+  bins.resize(total);
 #pragma omp parallel if (triangle_count > kMinParallelWork)
   {
     for (int c = omp_get_thread_num(); c < chunks; c += omp_get_num_threads()) {
