@@ -99,7 +99,7 @@ RemeshCounts MeshOptimizer::remesh(bool flip) {
     max_len[v] = rows_.row(v)[kRefLen] * (1.f + options_.edge_length_tolerance);
   }
   const RemeshCounts c =
-      remesh_pass(rows_, faces_, std::move(min_len), std::move(max_len), flip, rng_, options_.max_vertices);
+      remesh_pass(rows_, faces_, std::move(min_len), std::move(max_len), flip, rng_, options_.max_vertices, &topology_);
   refresh_positions();
   return c;
 }

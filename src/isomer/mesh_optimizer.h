@@ -63,6 +63,7 @@ class MeshOptimizer {
   std::vector<Vec3f> neighbor_sum_;
   std::vector<float> neighbor_count_;
   std::mt19937 rng_;
+  TopologyCache topology_;  // of faces_, kept between remeshing passes
   int step_ = 0;
 };
 

@@ -2,7 +2,11 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <map>
 #include <random>
+#include <string>
 
 #include "isomer/icosphere.h"
 #include "isomer/remesh/collapse.h"
@@ -30,6 +34,32 @@ double signed_volume(const VertexRows& rows, const std::vector<Vec3i>& faces) {
   return v;
 }
 
+// Same edges with the same faces on each side, each face side naming its edge, and the same rings;
+// edge numbers may differ (patched topologies keep theirs).
+void expect_same_topology(const EdgeTopology& a, const EdgeTopology& b, const std::vector<Vec3i>& faces) {
+  auto edges = [](const EdgeTopology& t) {
+    std::map<std::array<int, 2>, std::pair<std::array<int, 2>, char>> m;
+    for (size_t e = 0; e < t.edge_count(); ++e) m[t.edge_vertices[e]] = {t.edge_sides[e], t.edge_manifold[e]};
+    return m;
+  };
+  EXPECT_EQ(edges(a), edges(b));
+  ASSERT_EQ(a.face_edges.size(), faces.size());
+  for (size_t f = 0; f < faces.size(); ++f)
+    for (int i = 0; i < 3; ++i) {
+      const int u = faces[f][i], v = faces[f][(i + 1) % 3];
+      const std::array<int, 2> key = {std::min(u, v), std::max(u, v)};
+      ASSERT_EQ(a.edge_vertices[a.face_edges[f][i]], key) << "face " << f << " side " << i;
+    }
+  ASSERT_EQ(a.ring_offsets, b.ring_offsets);
+  for (size_t v = 0; v + 1 < a.ring_offsets.size(); ++v) {
+    std::vector<int> ra(a.ring.begin() + a.ring_offsets[v], a.ring.begin() + a.ring_offsets[v + 1]);
+    std::vector<int> rb(b.ring.begin() + b.ring_offsets[v], b.ring.begin() + b.ring_offsets[v + 1]);
+    std::sort(ra.begin(), ra.end());
+    std::sort(rb.begin(), rb.end());
+    ASSERT_EQ(ra, rb) << "ring of vertex " << v;
+  }
+}
+
 int euler_characteristic(const std::vector<Vec3i>& faces, size_t vertices) {
   return int(vertices) - int(build_edge_topology(faces, vertices).edge_count()) + int(faces.size());
 }
@@ -42,7 +72,7 @@ TEST(Remesh, SplitOneEdgeOfAnOctahedron) {
   std::vector<float> max_len(rows.count(), 10.f);
   max_len[m.faces[0][0]] = max_len[m.faces[0][1]] = 0.1f;  // only the edge between them is "long"
   std::vector<Vec3i> faces = m.faces;
-  EXPECT_EQ(split_long_edges(rows, faces, max_len), 1);
+  EXPECT_EQ(split_long_edges(rows, faces, build_edge_topology(faces, rows.count()), max_len), 1);
   EXPECT_EQ(rows.count(), 13u);
   EXPECT_EQ(faces.size(), 22u);
   EXPECT_EQ(closed_manifold_problem(faces, rows.count()), "");
@@ -56,7 +86,7 @@ TEST(Remesh, CollapseRemovesShortEdgesAndKeepsTheManifold) {
   std::vector<Vec3i> faces = m.faces;
   std::mt19937 rng(1);
   const std::vector<float> min_len(rows.count(), 0.5f);  // every edge (~0.3) is short
-  const int collapses = collapse_short_edges(rows, faces, min_len, rng);
+  const int collapses = collapse_short_edges(rows, faces, build_edge_topology(faces, rows.count()), min_len, rng);
   EXPECT_GT(collapses, 10);
   drop_unreferenced_vertices(rows, faces);
   EXPECT_EQ(rows.count(), m.vertex_count() - collapses);
@@ -70,7 +100,7 @@ TEST(Remesh, FlipsLowerValenceSpread) {
   std::vector<Vec3i> faces = m.faces;
   std::vector<float> max_len(rows.count(), 0.5f);  // edges are ~0.33 long
   for (int v = 0; v < 40; v += 7) max_len[v] = 0.f;  // split the edges around these vertices
-  split_long_edges(rows, faces, max_len);
+  split_long_edges(rows, faces, build_edge_topology(faces, rows.count()), max_len);
   auto spread = [&] {
     EdgeTopology t = build_edge_topology(faces, rows.count());
     int s = 0;
@@ -78,9 +108,12 @@ TEST(Remesh, FlipsLowerValenceSpread) {
     return s;
   };
   const int before = spread();
-  EXPECT_GT(flip_edges_for_valence(rows, faces), 0);
+  EdgeTopology t = build_edge_topology(faces, rows.count());
+  EXPECT_GT(flip_edges_for_valence(rows, faces, t), 0);
   EXPECT_LT(spread(), before);
   EXPECT_EQ(closed_manifold_problem(faces, rows.count()), "");
+  // The topology patched by the flips is the flipped faces' own.
+  expect_same_topology(t, build_edge_topology(faces, rows.count()), faces);
 }
 
 // Many random rounds of collapse / split / flip with random target lengths and jittered positions.
@@ -91,6 +124,7 @@ TEST(Remesh, RandomRoundsKeepClosedOrientedManifoldAndRowsFollowVertices) {
   std::mt19937 rng(42);
   std::uniform_real_distribution<float> unit(0.f, 1.f);
   int total_collapses = 0, total_splits = 0, total_flips = 0;
+  TopologyCache cache;  // kept across rounds, as the optimizer keeps it
   for (int round = 0; round < 150; ++round) {
     // Jitter positions (tag moves with x), then remesh toward a random per-vertex length.
     for (size_t v = 0; v < rows.count(); ++v) {
@@ -105,8 +139,12 @@ TEST(Remesh, RandomRoundsKeepClosedOrientedManifoldAndRowsFollowVertices) {
     std::vector<float> min_len(ref), max_len(ref);
     for (float& x : min_len) x *= 0.5f;
     for (float& x : max_len) x *= 1.5f;
-    const RemeshCounts c = remesh_pass(rows, faces, min_len, max_len, true, rng);
+    const RemeshCounts c = remesh_pass(rows, faces, min_len, max_len, true, rng, 1000000, &cache);
     total_collapses += c.collapses, total_splits += c.splits, total_flips += c.flips;
+    if (round % 10 == 0) {
+      SCOPED_TRACE("round " + std::to_string(round));
+      expect_same_topology(cache.of(faces, rows.count()), build_edge_topology(faces, rows.count()), faces);
+    }
     ASSERT_EQ(closed_manifold_problem(faces, rows.count()), "") << "round " << round;
     ASSERT_EQ(euler_characteristic(faces, rows.count()), 2) << "round " << round;
     ASSERT_GT(signed_volume(rows, faces), 0.0) << "round " << round;

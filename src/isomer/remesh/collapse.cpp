@@ -28,11 +28,11 @@ bool link_condition_holds(const EdgeTopology& t, int e, const std::vector<Vec3i>
 
 }  // namespace
 
-int collapse_short_edges(VertexRows& rows, std::vector<Vec3i>& faces, const std::vector<float>& min_edge_length,
-                         std::mt19937& rng, const CollapseOptions& options) {
+int collapse_short_edges(VertexRows& rows, std::vector<Vec3i>& faces, const EdgeTopology& t,
+                         const std::vector<float>& min_edge_length, std::mt19937& rng,
+                         const CollapseOptions& options) {
   const size_t n = rows.count();
   if (faces.size() <= 4) return 0;
-  const EdgeTopology t = build_edge_topology(faces, n);
   const size_t edges = t.edge_count();
   std::vector<float> length(edges);
   for (size_t e = 0; e < edges; ++e)

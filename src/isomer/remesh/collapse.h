@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/mesh.h"
+#include "isomer/remesh/edge_topology.h"
 #include "isomer/remesh/vertex_rows.h"
 
 namespace u3d {
@@ -17,8 +18,10 @@ struct CollapseOptions {
 };
 
 // Collapses edges in place: the kept vertex's row becomes the mean of both rows, the removed vertex is
-// left unreferenced, and the two faces of each collapsed edge are deleted. Returns the collapse count.
-int collapse_short_edges(VertexRows& rows, std::vector<Vec3i>& faces, const std::vector<float>& min_edge_length,
-                         std::mt19937& rng, const CollapseOptions& options = {});
+// left unreferenced, and the two faces of each collapsed edge are deleted. `topology` is that of `faces`
+// on entry (stale afterwards when anything collapsed). Returns the collapse count.
+int collapse_short_edges(VertexRows& rows, std::vector<Vec3i>& faces, const EdgeTopology& topology,
+                         const std::vector<float>& min_edge_length, std::mt19937& rng,
+                         const CollapseOptions& options = {});
 
 }  // namespace u3d

@@ -52,14 +52,17 @@ EdgeTopology build_edge_topology(const std::vector<Vec3i>& faces, size_t vertex_
       k = end;
     }
   }
-  // Vertex rings from the unique edges.
+  rebuild_rings(t, vertex_count);
+  return t;
+}
+
+void rebuild_rings(EdgeTopology& t, size_t vertex_count) {
   t.ring_offsets.assign(vertex_count + 1, 0);
   for (const auto& ev : t.edge_vertices) ++t.ring_offsets[ev[0] + 1], ++t.ring_offsets[ev[1] + 1];
   for (size_t v = 0; v < vertex_count; ++v) t.ring_offsets[v + 1] += t.ring_offsets[v];
   t.ring.resize(t.ring_offsets[vertex_count]);
-  std::copy(t.ring_offsets.begin(), t.ring_offsets.end() - 1, fill.begin());
+  std::vector<int> fill(t.ring_offsets.begin(), t.ring_offsets.end() - 1);
   for (const auto& ev : t.edge_vertices) t.ring[fill[ev[0]]++] = ev[1], t.ring[fill[ev[1]]++] = ev[0];
-  return t;
 }
 
 }  // namespace u3d

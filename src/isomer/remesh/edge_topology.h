@@ -1,6 +1,8 @@
 #pragma once
 // Edge-based connectivity of a triangle mesh, rebuilt from the face list after each batch of edits:
 // unique edges, the faces on both sides of each edge, the edge of each face side, and vertex rings.
+// Edges are numbered by (lower, higher) vertex after a build; edits that patch the topology in place
+// (flips) keep the numbers, so the order is not meaningful.
 #include <array>
 #include <vector>
 
@@ -27,5 +29,24 @@ struct EdgeTopology {
 };
 
 EdgeTopology build_edge_topology(const std::vector<Vec3i>& faces, size_t vertex_count);
+
+// Recomputes the vertex rings from the edges (after edits that patched the edges).
+void rebuild_rings(EdgeTopology& t, size_t vertex_count);
+
+// The topology of a face list that is edited between uses: built on demand, dropped by edits that
+// change the connectivity wholesale (collapses, splits), kept by edits that patch it (flips). Building
+// is most of a remeshing pass's cost, and late in an optimisation many passes collapse or split nothing.
+class TopologyCache {
+ public:
+  EdgeTopology& of(const std::vector<Vec3i>& faces, size_t vertex_count) {
+    if (!valid_) topology_ = build_edge_topology(faces, vertex_count), valid_ = true;
+    return topology_;
+  }
+  void invalidate() { valid_ = false; }
+
+ private:
+  EdgeTopology topology_;
+  bool valid_ = false;
+};
 
 }  // namespace u3d

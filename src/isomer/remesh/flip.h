@@ -5,11 +5,13 @@
 #include <vector>
 
 #include "core/mesh.h"
+#include "isomer/remesh/edge_topology.h"
 #include "isomer/remesh/vertex_rows.h"
 
 namespace u3d {
 
-// Flips in place; returns the number of flipped edges.
-int flip_edges_for_valence(const VertexRows& rows, std::vector<Vec3i>& faces);
+// Flips in place and patches `topology` (that of `faces` on entry) to match the flipped faces, so it
+// stays valid for the next pass. Returns the number of flipped edges.
+int flip_edges_for_valence(const VertexRows& rows, std::vector<Vec3i>& faces, EdgeTopology& topology);
 
 }  // namespace u3d

@@ -28,12 +28,22 @@ std::vector<int> drop_unreferenced_vertices(VertexRows& rows, std::vector<Vec3i>
 }
 
 RemeshCounts remesh_pass(VertexRows& rows, std::vector<Vec3i>& faces, std::vector<float> min_edge_length,
-                         std::vector<float> max_edge_length, bool flip, std::mt19937& rng, size_t max_vertices) {
+                         std::vector<float> max_edge_length, bool flip, std::mt19937& rng, size_t max_vertices,
+                         TopologyCache* cache) {
+  TopologyCache local;
+  TopologyCache& topology = cache ? *cache : local;
   RemeshCounts counts;
-  counts.collapses = collapse_short_edges(rows, faces, min_edge_length, rng);
-  if (rows.count() < max_vertices) counts.splits = split_long_edges(rows, faces, max_edge_length);
+  counts.collapses = collapse_short_edges(rows, faces, topology.of(faces, rows.count()), min_edge_length, rng);
+  if (counts.collapses > 0) topology.invalidate();
+  if (rows.count() < max_vertices) {
+    counts.splits = split_long_edges(rows, faces, topology.of(faces, rows.count()), max_edge_length);
+    if (counts.splits > 0) topology.invalidate();
+  }
+  // Collapses leave their removed vertices unreferenced: renumbering invalidates the topology too.
+  const size_t before = rows.count();
   drop_unreferenced_vertices(rows, faces);
-  if (flip) counts.flips = flip_edges_for_valence(rows, faces);
+  if (rows.count() != before) topology.invalidate();
+  if (flip) counts.flips = flip_edges_for_valence(rows, faces, topology.of(faces, rows.count()));
   return counts;
 }
 

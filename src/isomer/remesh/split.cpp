@@ -4,8 +4,8 @@
 
 namespace u3d {
 
-int split_long_edges(VertexRows& rows, std::vector<Vec3i>& faces, std::vector<float>& max_edge_length) {
-  const EdgeTopology t = build_edge_topology(faces, rows.count());
+int split_long_edges(VertexRows& rows, std::vector<Vec3i>& faces, const EdgeTopology& t,
+                     std::vector<float>& max_edge_length) {
   std::vector<int> midpoint(t.edge_count(), -1);
   int splits = 0;
   for (size_t e = 0; e < t.edge_count(); ++e) {

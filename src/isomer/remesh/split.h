@@ -5,12 +5,15 @@
 #include <vector>
 
 #include "core/mesh.h"
+#include "isomer/remesh/edge_topology.h"
 #include "isomer/remesh/vertex_rows.h"
 
 namespace u3d {
 
 // Splits in place; max_edge_length is per vertex and grows with the new vertices (mean of the ends).
-// Returns the number of split edges.
-int split_long_edges(VertexRows& rows, std::vector<Vec3i>& faces, std::vector<float>& max_edge_length);
+// `topology` is that of `faces` on entry (stale afterwards when anything split). Returns the number of
+// split edges.
+int split_long_edges(VertexRows& rows, std::vector<Vec3i>& faces, const EdgeTopology& topology,
+                     std::vector<float>& max_edge_length);
 
 }  // namespace u3d
