@@ -58,6 +58,20 @@ void BM_Rasterize(benchmark::State& state) {
   set_counters(state, mesh, res);
 }
 
+// Frame after frame into the same buffer with back faces culled, as the optimisation stages draw each
+// view (run with OMP_NUM_THREADS=1 to see one view's cost on one thread, as there).
+void BM_RasterizeFrames(benchmark::State& state) {
+  const Mesh& mesh = bumpy_sphere(int(state.range(0)));
+  const int res = int(state.range(1));
+  const Camera cam = view_camera(View::Front, res);
+  RasterBuffer buf;
+  for (auto _ : state) {
+    rasterize_into(mesh.positions, mesh.faces, cam, buf, RasterOptions{.cull_backfaces = true});
+    benchmark::DoNotOptimize(buf.face_id.data());
+  }
+  set_counters(state, mesh, res);
+}
+
 // The whole reference render: rasterize + RGB and normal shading (no supersampling).
 void BM_RenderView(benchmark::State& state) {
   const Mesh& mesh = bumpy_sphere(int(state.range(0)));
@@ -73,5 +87,6 @@ void BM_RenderView(benchmark::State& state) {
 }  // namespace
 
 BENCHMARK(BM_Rasterize)->ArgsProduct({{100000, 1000000}, {512, 2048}})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RasterizeFrames)->ArgsProduct({{40000, 160000}, {512}})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RenderView)->ArgsProduct({{100000, 1000000}, {512, 2048}})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_MAIN();

@@ -1,6 +1,7 @@
 #include "isomer/normal_renderer.h"
 
 #include <algorithm>
+#include <numeric>
 
 #include "render/barycentric_backward.h"
 #include "render/interpolate.h"
@@ -34,6 +35,8 @@ std::vector<float> normal_color_attributes(const std::vector<Vec3f>& unit_vector
 
 NormalRenderer::NormalRenderer(std::vector<Camera> cameras) {
   views_.resize(cameras.size());
+  largest_first_.resize(cameras.size());
+  std::iota(largest_first_.begin(), largest_first_.end(), 0);
   for (size_t i = 0; i < cameras.size(); ++i) {
     DifferentiableView& v = views_[i];
     v.camera = cameras[i];
@@ -52,8 +55,8 @@ void NormalRenderer::render(const std::vector<Vec3f>& positions, const std::vect
   attributes_ = normal_color_attributes(vertex_normals);
   neighbors_ = edge_neighbors(faces);
 #pragma omp parallel for schedule(dynamic, 1) if (views_.size() > 1)
-  for (size_t i = 0; i < views_.size(); ++i) {
-    DifferentiableView& v = views_[i];
+  for (size_t k = 0; k < views_.size(); ++k) {
+    DifferentiableView& v = views_[size_t(largest_first_[k])];
     // Forget the previous frame's footprint.
     zero_pixels(v.color, v.active);
     zero_pixels(v.image, v.active);
@@ -77,6 +80,8 @@ void NormalRenderer::render(const std::vector<Vec3f>& positions, const std::vect
     for (size_t k = v.covered.size(); k < v.active.size(); ++k) v.listed[v.active[k]] = 0;
     zero_pixels(v.grad_image, v.active);
   }
+  std::stable_sort(largest_first_.begin(), largest_first_.end(),
+                   [&](int a, int b) { return views_[size_t(a)].active.size() > views_[size_t(b)].active.size(); });
 }
 
 void NormalRenderer::render_attribute(const std::vector<Vec3i>& faces, const std::vector<Vec3f>& unit_vectors,
@@ -101,8 +106,8 @@ void NormalRenderer::backward(const std::vector<Vec3f>& positions, const std::ve
                               const VertexNormals& normals, std::vector<Vec3f>& grad_positions) {
   const size_t n = positions.size();
 #pragma omp parallel for schedule(dynamic, 1) if (views_.size() > 1)
-  for (size_t i = 0; i < views_.size(); ++i) {
-    DifferentiableView& v = views_[i];
+  for (size_t k = 0; k < views_.size(); ++k) {
+    DifferentiableView& v = views_[size_t(largest_first_[k])];
     // Identity part of the anti-aliasing backward, then its blend and edge parts.
     for (int32_t p : v.covered)
       std::copy_n(v.grad_image.data.data() + size_t(p) * kChannels, kChannels,

@@ -49,6 +49,11 @@ class NormalRenderer {
   const DifferentiableView& view(size_t i) const { return views_[i]; }
   DifferentiableView& view(size_t i) { return views_[i]; }
 
+  // View indices by decreasing footprint in the last frame. Per-view parallel loops hand out views in
+  // this order: two threads taking the two large side views first end together, where the plain order
+  // (small, large, small, large) leaves one idle for a small view's time every pass.
+  const std::vector<int>& largest_first() const { return largest_first_; }
+
   // Renders all views of the mesh with these unit vertex normals; clears each view's grad_image on its
   // new active pixels.
   void render(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& faces,
@@ -68,6 +73,7 @@ class NormalRenderer {
   std::vector<float> attributes_;  // per vertex ((n + 1) / 2, 1)
   EdgeNeighbors neighbors_;
   Image attribute_color_;  // render_attribute's colour before anti-aliasing
+  std::vector<int> largest_first_;
 };
 
 // ((n + 1) / 2, 1) per vertex: the colour and coverage channels the renderer interpolates.
