@@ -135,15 +135,21 @@ void find_antialias_pairs(const RasterBuffer& raster, const std::vector<Vec3i>& 
   const int w = raster.width, h = raster.height;
   // Pairs differ in face id, so both pixels are background outside the footprint grown by one pixel.
   const PixelRect& r = raster.footprint;
+  // Most pairs that differ in face id are interior edges between two faces with no silhouette edge:
+  // the edge found is always one of the nearer face's, so those are skipped before any analysis.
+  auto silhouette_bits = [&](int32_t face) -> uint8_t { return face >= 0 ? silhouette[size_t(face)] : 0; };
+  auto worth_analysing = [&](int32_t a, int32_t b) { return a != b && (silhouette_bits(a) | silhouette_bits(b)) != 0; };
   AntialiasPair pair;
   for (int y = std::max(r.y0 - 1, 0); y <= r.y1; ++y) {
     const int32_t* row = raster.face_id.data() + size_t(y) * w;
     const int32_t* below = y + 1 < h ? row + w : nullptr;
     for (int x = std::max(r.x0 - 1, 0); x <= r.x1; ++x) {
       const int32_t p = y * w + x;
-      if (x + 1 < w && row[x] != row[x + 1] && analyse_pair(raster, faces, silhouette, projection, p, p + 1, false, pair))
+      if (x + 1 < w && worth_analysing(row[x], row[x + 1]) &&
+          analyse_pair(raster, faces, silhouette, projection, p, p + 1, false, pair))
         pairs.push_back(pair);
-      if (below && row[x] != below[x] && analyse_pair(raster, faces, silhouette, projection, p, p + w, true, pair))
+      if (below && worth_analysing(row[x], below[x]) &&
+          analyse_pair(raster, faces, silhouette, projection, p, p + w, true, pair))
         pairs.push_back(pair);
     }
   }

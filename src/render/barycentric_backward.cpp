@@ -21,20 +21,27 @@ void orthographic_backward(const RasterBuffer& raster, std::span<const int32_t> 
     Vec2f q[2] = {Vec2f::Zero(), Vec2f::Zero()};
     bool used = false;
   };
-  std::vector<Moments> moments(faces.size());
+  // Per-thread storage kept between calls (this runs for every view of every optimisation step): all
+  // entries are zero on entry, and only the faces the pixels touch are visited and reset again.
+  thread_local std::vector<Moments> moments;
+  thread_local std::vector<int32_t> touched;
+  if (moments.size() < faces.size()) moments.resize(faces.size());
+  touched.clear();
   for (int32_t p : pixels) {
     const Vec2f& g = grad_bary[p];
     if (g.x() == 0.f && g.y() == 0.f) continue;
-    Moments& m = moments[raster.face_id[p]];
+    const int32_t face = raster.face_id[p];
+    Moments& m = moments[size_t(face)];
     const Vec2f q(float(p % raster.width) + 0.5f, float(p / raster.width) + 0.5f);
     m.g[0] += g.x(), m.g[1] += g.y();
     m.q[0] += g.x() * q, m.q[1] += g.y() * q;
+    if (!m.used) touched.push_back(face);
     m.used = true;
   }
-  for (size_t f = 0; f < faces.size(); ++f) {
-    const Moments& m = moments[f];
-    if (!m.used) continue;
-    const Vec3i& c = faces[f];
+  for (const int32_t f : touched) {
+    const Moments m = moments[size_t(f)];
+    moments[size_t(f)] = Moments{};
+    const Vec3i& c = faces[size_t(f)];
     const Vec2f a[3] = {projection.pixel[c[0]], projection.pixel[c[1]], projection.pixel[c[2]]};
     const float area = cross2(a[1] - a[0], a[2] - a[0]);
     if (std::abs(area) < 1e-12f) continue;
