@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/memory.h"
 #include "core/progress.h"
 #include "io/mesh_io.h"
 #include "isomer/mesh_topology.h"
@@ -74,6 +75,7 @@ void run_one(int resolution) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  keep_freed_memory_for_reuse();  // as the CLI does
   std::vector<int> resolutions;
   for (int i = 1; i < argc; ++i) resolutions.push_back(std::atoi(argv[i]));
   if (resolutions.empty()) resolutions = {512, 2048};

@@ -6,6 +6,7 @@
 
 #include "cli/command.h"
 #include "core/error.h"
+#include "core/memory.h"
 #include "core/parallel.h"
 #include "core/progress.h"
 #include "unique3d/version.h"
@@ -44,6 +45,7 @@ int main(int argc, char** argv) {
     return app.exit(e);
   }
   set_progress_quiet(quiet);
+  keep_freed_memory_for_reuse();
   configure_threads(threads);
 #ifdef UNIQUE3D_WITH_TORCH
   nn::configure_torch_threads(threads);  // the networks use the same count as our OpenMP loops
