@@ -9,8 +9,14 @@ namespace u3d::nn {
 // It also asks libtorch for its AVX-512 kernels (ATEN_CPU_CAPABILITY=avx512) when the CPU has them
 // and the user did not set that variable; libtorch 1.13 would not check the CPU itself. libtorch fixes
 // its kernel choice at its first operation, so call this before running any network.
+// It also calls keep_freed_memory_for_reuse().
 // Returns the intra-op thread count now in effect.
 int configure_torch_threads(int threads = 0);
+
+// Makes glibc's malloc keep freed memory in the process (no mmap for large blocks, no trimming of the
+// heap) so the networks' large tensors reuse already-mapped pages instead of faulting them in anew
+// on every forward pass.
+void keep_freed_memory_for_reuse();
 
 // Whether this CPU has the instruction sets ATen's AVX-512 kernels use.
 bool cpu_runs_avx512_kernels();
