@@ -3,6 +3,8 @@
 #include <ATen/Parallel.h>
 #include <gtest/gtest.h>
 #include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <cstring>
@@ -59,4 +61,34 @@ TEST(Runtime, FreedLargeBlocksAreReusedWithoutPageFaults) {
   const long pages = static_cast<long>(bytes / 4096);
   // Without the set-up every one of the 16384 pages faults again.
   EXPECT_LT(faults_to_fill_a_fresh_block(bytes), pages / 10);
+}
+
+// Runs only inside the restarted child of the next test (the marker variable is set there).
+TEST(Runtime, RestartedProgramSeesPassiveWaitPolicy) {
+  if (std::getenv("U3D_TEST_RESTART_CHILD") == nullptr) GTEST_SKIP() << "only meaningful in the restarted child";
+  ASSERT_NE(std::getenv("OMP_WAIT_POLICY"), nullptr);
+  EXPECT_EQ(std::string(std::getenv("OMP_WAIT_POLICY")), "PASSIVE");
+}
+
+TEST(Runtime, RestartsWithPassiveOpenMpWaitsUnlessTheUserChose) {
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    unsetenv("OMP_WAIT_POLICY");
+    unsetenv("GOMP_SPINCOUNT");
+    setenv("U3D_TEST_RESTART_CHILD", "1", 1);
+    std::string program = "test_nn", filter = "--gtest_filter=Runtime.RestartedProgramSeesPassiveWaitPolicy";
+    char* argv[] = {program.data(), filter.data(), nullptr};
+    u3d::nn::restart_with_passive_openmp_waits(argv);
+    _exit(77);  // not restarted
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);  // the restarted test passed (77: no restart, 1: wrong policy)
+
+  // A choice already in the environment means no restart: the call returns.
+  setenv("GOMP_SPINCOUNT", "1000", 1);
+  u3d::nn::restart_with_passive_openmp_waits(nullptr);
+  unsetenv("GOMP_SPINCOUNT");
 }
