@@ -1,11 +1,14 @@
 // Full-size sd-image-variations UNet forward (860M parameters, random weights), fp32 on the CPU with
 // every core: batch 8 at 32x32 latents and batch 2 at 64x64. Reports the median of a few runs (wall time)
 // and the process CPU time of all threads.
-// On a shared machine, OMP_WAIT_POLICY=PASSIVE stops libgomp's idle workers from spinning against
-// OpenBLAS's own threads (measured: batch 2 at 64x64, 48 s -> 38 s CPU). libgomp reads it at load
-// time, so it can only be set in the environment, not from the program.
+// It starts itself again with OMP_WAIT_POLICY=PASSIVE unless the environment chose a wait policy
+// (see nn/runtime.h): set OMP_WAIT_POLICY=ACTIVE or GOMP_SPINCOUNT to measure libgomp's spinning.
 #include <benchmark/benchmark.h>
+#include <sys/resource.h>
 #include <torch/torch.h>
+
+#include <string>
+#include <vector>
 
 #include "nn/config_json.h"
 #include "nn/layers.h"
@@ -37,11 +40,19 @@ void BM_UNetForward(benchmark::State& state) {
   torch::Tensor sample = torch::randn({batch, 4, size, size});
   torch::Tensor embedding = torch::randn({batch, 1, 768});
   torch::Tensor timestep = torch::tensor(500.0f);
+  rusage before{};
+  getrusage(RUSAGE_SELF, &before);
   for (auto _ : state) {
     torch::Tensor out = unet->forward(sample, timestep, embedding);
     benchmark::DoNotOptimize(out.data_ptr());
   }
+  rusage after{};
+  getrusage(RUSAGE_SELF, &after);
   state.counters["threads"] = at::get_num_threads();
+  // Page faults were a large share of the time (freed tensors handed back to the kernel); peak RSS
+  // shows what keeping freed memory costs.
+  state.counters["minor_faults"] = static_cast<double>(after.ru_minflt - before.ru_minflt);
+  state.counters["peak_rss_GB"] = static_cast<double>(after.ru_maxrss) / (1024.0 * 1024.0);
 }
 
 BENCHMARK(BM_UNetForward)
@@ -49,8 +60,6 @@ BENCHMARK(BM_UNetForward)
     ->Args({8, 32})
     ->Args({2, 64})
     ->Iterations(1)
-    ->Repetitions(3)
-    ->ReportAggregatesOnly(true)
     ->Unit(benchmark::kSecond)
     ->MeasureProcessCPUTime()  // CPU column = all threads: comparable when the machine is shared
     ->UseRealTime();
@@ -58,10 +67,17 @@ BENCHMARK(BM_UNetForward)
 }  // namespace
 
 int main(int argc, char** argv) {
+  u3d::nn::restart_with_passive_openmp_waits(argv);  // as the CLI does
   u3d::nn::configure_torch_threads();  // every core, and libtorch's fastest kernels (as the CLI sets up)
   // Random weights can drive values into denormals, which would measure the FPU's slow path.
   at::globalContext().setFlushDenormal(true);
-  benchmark::Initialize(&argc, argv);
+  // By default three runs, aggregates only (the first run also pays for oneDNN's primitive set-up);
+  // the same flags given on the command line come later and win.
+  std::vector<char*> args(argv, argv + argc);
+  std::string repetitions = "--benchmark_repetitions=3", aggregates = "--benchmark_report_aggregates_only=true";
+  args.insert(args.begin() + 1, {repetitions.data(), aggregates.data()});
+  int arg_count = static_cast<int>(args.size());
+  benchmark::Initialize(&arg_count, args.data());
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
   return 0;

@@ -2,6 +2,9 @@
 
 #include <ATen/Parallel.h>
 
+#include <malloc.h>
+#include <unistd.h>
+
 #include <cstdlib>
 #include <mutex>
 
@@ -15,7 +18,31 @@ bool cpu_runs_avx512_kernels() {
          __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("fma");
 }
 
+void restart_with_passive_openmp_waits(char** argv) {
+  // libtorch's OpenMP workers (libgomp) and OpenBLAS's own pthreads take turns on the same cores; by
+  // default an idle libgomp worker spins for milliseconds after each parallel region, right when
+  // OpenBLAS's threads need the core for the next matrix product. libgomp reads OMP_WAIT_POLICY only
+  // in its library constructor, before main(), and a setenv() from the executable's .preinit_array
+  // is lost (glibc sets `environ` again after it), so the only way to choose the policy for the
+  // user is to start the program again with it in the environment.
+  if (std::getenv("OMP_WAIT_POLICY") != nullptr || std::getenv("GOMP_SPINCOUNT") != nullptr) return;
+  setenv("OMP_WAIT_POLICY", "PASSIVE", 1);
+  execv("/proc/self/exe", argv);
+  unsetenv("OMP_WAIT_POLICY");  // no /proc: run on with libgomp's default
+}
+
+void keep_freed_memory_for_reuse() {
+  // glibc serves blocks above its mmap threshold (at most 32 MB, and most UNet activations are a
+  // few to 80 MB) with mmap and unmaps them on free, so every forward pass faulted its working set
+  // in again: 1.4 million page faults and about a fifth of the CPU time per full-size UNet forward
+  // (bench_unet). Served from the heap and never trimmed, freed tensors are reused instead; the peak
+  // resident size stays the same, the process just does not shrink after its largest step.
+  mallopt(M_MMAP_MAX, 0);
+  mallopt(M_TRIM_THRESHOLD, -1);  // cast to size_t by glibc: never trim
+}
+
 int configure_torch_threads(int threads) {
+  keep_freed_memory_for_reuse();
   // libtorch 1.13 uses AVX2 kernels unless told otherwise. With AVX-512 the full UNet took about 15%
   // less CPU time here (bench_unet); overwrite=0 keeps a user's own choice. ATen 1.13 takes the
   // variable on trust, so it is only set where the CPU has the instructions (else: SIGILL).

@@ -2,8 +2,12 @@
 
 #include <ATen/Parallel.h>
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
+#include <cstring>
 #include <string>
 
 TEST(Runtime, ConfiguresTorchThreads) {
@@ -28,4 +32,63 @@ TEST(Runtime, AsksForAvx512KernelsUnlessTheUserChose) {
   u3d::nn::configure_torch_threads(1);
   EXPECT_EQ(std::string(std::getenv("ATEN_CPU_CAPABILITY")), "default");
   if (before) setenv("ATEN_CPU_CAPABILITY", saved.c_str(), 1); else unsetenv("ATEN_CPU_CAPABILITY");
+}
+
+namespace {
+
+long minor_faults() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_minflt;
+}
+
+// Allocates and touches `bytes`, frees them; returns the page faults this took.
+long faults_to_fill_a_fresh_block(size_t bytes) {
+  const long before = minor_faults();
+  void* block = std::malloc(bytes);
+  std::memset(block, 1, bytes);
+  asm volatile("" : : "r"(block) : "memory");  // the compiler may not drop the unused block
+  std::free(block);
+  return minor_faults() - before;
+}
+
+}  // namespace
+
+TEST(Runtime, FreedLargeBlocksAreReusedWithoutPageFaults) {
+  u3d::nn::keep_freed_memory_for_reuse();
+  const size_t bytes = size_t{64} << 20;  // above glibc's largest mmap threshold (32 MB)
+  faults_to_fill_a_fresh_block(bytes);    // maps the pages once
+  const long pages = static_cast<long>(bytes / 4096);
+  // Without the set-up every one of the 16384 pages faults again.
+  EXPECT_LT(faults_to_fill_a_fresh_block(bytes), pages / 10);
+}
+
+// Runs only inside the restarted child of the next test (the marker variable is set there).
+TEST(Runtime, RestartedProgramSeesPassiveWaitPolicy) {
+  if (std::getenv("U3D_TEST_RESTART_CHILD") == nullptr) GTEST_SKIP() << "only meaningful in the restarted child";
+  ASSERT_NE(std::getenv("OMP_WAIT_POLICY"), nullptr);
+  EXPECT_EQ(std::string(std::getenv("OMP_WAIT_POLICY")), "PASSIVE");
+}
+
+TEST(Runtime, RestartsWithPassiveOpenMpWaitsUnlessTheUserChose) {
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    unsetenv("OMP_WAIT_POLICY");
+    unsetenv("GOMP_SPINCOUNT");
+    setenv("U3D_TEST_RESTART_CHILD", "1", 1);
+    std::string program = "test_nn", filter = "--gtest_filter=Runtime.RestartedProgramSeesPassiveWaitPolicy";
+    char* argv[] = {program.data(), filter.data(), nullptr};
+    u3d::nn::restart_with_passive_openmp_waits(argv);
+    _exit(77);  // not restarted
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);  // the restarted test passed (77: no restart, 1: wrong policy)
+
+  // A choice already in the environment means no restart: the call returns.
+  setenv("GOMP_SPINCOUNT", "1000", 1);
+  u3d::nn::restart_with_passive_openmp_waits(nullptr);
+  unsetenv("GOMP_SPINCOUNT");
 }
