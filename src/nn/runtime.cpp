@@ -2,12 +2,12 @@
 
 #include <ATen/Parallel.h>
 
-#include <malloc.h>
 #include <unistd.h>
 
 #include <cstdlib>
 #include <mutex>
 
+#include "core/memory.h"
 #include "core/parallel.h"
 
 namespace u3d::nn {
@@ -31,18 +31,8 @@ void restart_with_passive_openmp_waits(char** argv) {
   unsetenv("OMP_WAIT_POLICY");  // no /proc: run on with libgomp's default
 }
 
-void keep_freed_memory_for_reuse() {
-  // glibc serves blocks above its mmap threshold (at most 32 MB, and most UNet activations are a
-  // few to 80 MB) with mmap and unmaps them on free, so every forward pass faulted its working set
-  // in again: 1.4 million page faults and about a fifth of the CPU time per full-size UNet forward
-  // (bench_unet). Served from the heap and never trimmed, freed tensors are reused instead; the peak
-  // resident size stays the same, the process just does not shrink after its largest step.
-  mallopt(M_MMAP_MAX, 0);
-  mallopt(M_TRIM_THRESHOLD, -1);  // cast to size_t by glibc: never trim
-}
-
 int configure_torch_threads(int threads) {
-  keep_freed_memory_for_reuse();
+  u3d::keep_freed_memory_for_reuse();  // networks free and reallocate tens of MB every layer
   // libtorch 1.13 uses AVX2 kernels unless told otherwise. With AVX-512 the full UNet took about 15%
   // less CPU time here (bench_unet); overwrite=0 keeps a user's own choice. ATen 1.13 takes the
   // variable on trust, so it is only set where the CPU has the instructions (else: SIGILL).

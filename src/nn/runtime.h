@@ -9,7 +9,7 @@ namespace u3d::nn {
 // It also asks libtorch for its AVX-512 kernels (ATEN_CPU_CAPABILITY=avx512) when the CPU has them
 // and the user did not set that variable; libtorch 1.13 would not check the CPU itself. libtorch fixes
 // its kernel choice at its first operation, so call this before running any network.
-// It also calls keep_freed_memory_for_reuse().
+// It also calls u3d::keep_freed_memory_for_reuse() (core/memory.h).
 // Returns the intra-op thread count now in effect.
 int configure_torch_threads(int threads = 0);
 
@@ -21,11 +21,6 @@ int configure_torch_threads(int threads = 0);
 // against OpenBLAS's threads. bench_unet, batch 8 at 32x32 on 2 cores: about a third less CPU time.
 // Returns only when no restart was needed or possible.
 void restart_with_passive_openmp_waits(char** argv);
-
-// Makes glibc's malloc keep freed memory in the process (no mmap for large blocks, no trimming of the
-// heap) so the networks' large tensors reuse already-mapped pages instead of faulting them in anew
-// on every forward pass.
-void keep_freed_memory_for_reuse();
 
 // Whether this CPU has the instruction sets ATen's AVX-512 kernels use.
 bool cpu_runs_avx512_kernels();

@@ -2,12 +2,10 @@
 
 #include <ATen/Parallel.h>
 #include <gtest/gtest.h>
-#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cstdlib>
-#include <cstring>
 #include <string>
 
 TEST(Runtime, ConfiguresTorchThreads) {
@@ -32,35 +30,6 @@ TEST(Runtime, AsksForAvx512KernelsUnlessTheUserChose) {
   u3d::nn::configure_torch_threads(1);
   EXPECT_EQ(std::string(std::getenv("ATEN_CPU_CAPABILITY")), "default");
   if (before) setenv("ATEN_CPU_CAPABILITY", saved.c_str(), 1); else unsetenv("ATEN_CPU_CAPABILITY");
-}
-
-namespace {
-
-long minor_faults() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return usage.ru_minflt;
-}
-
-// Allocates and touches `bytes`, frees them; returns the page faults this took.
-long faults_to_fill_a_fresh_block(size_t bytes) {
-  const long before = minor_faults();
-  void* block = std::malloc(bytes);
-  std::memset(block, 1, bytes);
-  asm volatile("" : : "r"(block) : "memory");  // the compiler may not drop the unused block
-  std::free(block);
-  return minor_faults() - before;
-}
-
-}  // namespace
-
-TEST(Runtime, FreedLargeBlocksAreReusedWithoutPageFaults) {
-  u3d::nn::keep_freed_memory_for_reuse();
-  const size_t bytes = size_t{64} << 20;  // above glibc's largest mmap threshold (32 MB)
-  faults_to_fill_a_fresh_block(bytes);    // maps the pages once
-  const long pages = static_cast<long>(bytes / 4096);
-  // Without the set-up every one of the 16384 pages faults again.
-  EXPECT_LT(faults_to_fill_a_fresh_block(bytes), pages / 10);
 }
 
 // Runs only inside the restarted child of the next test (the marker variable is set there).
