@@ -55,8 +55,8 @@ void NormalRenderer::render(const std::vector<Vec3f>& positions, const std::vect
   attributes_ = normal_color_attributes(vertex_normals);
   neighbors_ = edge_neighbors(faces);
 #pragma omp parallel for schedule(dynamic, 1) if (views_.size() > 1)
-  for (size_t k = 0; k < views_.size(); ++k) {
-    DifferentiableView& v = views_[size_t(largest_first_[k])];
+  for (size_t slot = 0; slot < views_.size(); ++slot) {
+    DifferentiableView& v = views_[size_t(largest_first_[slot])];
     // Forget the previous frame's footprint.
     zero_pixels(v.color, v.active);
     zero_pixels(v.image, v.active);
@@ -106,8 +106,8 @@ void NormalRenderer::backward(const std::vector<Vec3f>& positions, const std::ve
                               const VertexNormals& normals, std::vector<Vec3f>& grad_positions) {
   const size_t n = positions.size();
 #pragma omp parallel for schedule(dynamic, 1) if (views_.size() > 1)
-  for (size_t k = 0; k < views_.size(); ++k) {
-    DifferentiableView& v = views_[size_t(largest_first_[k])];
+  for (size_t slot = 0; slot < views_.size(); ++slot) {
+    DifferentiableView& v = views_[size_t(largest_first_[slot])];
     // Identity part of the anti-aliasing backward, then its blend and edge parts.
     for (int32_t p : v.covered)
       std::copy_n(v.grad_image.data.data() + size_t(p) * kChannels, kChannels,
