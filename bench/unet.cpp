@@ -1,8 +1,8 @@
 // Full-size sd-image-variations UNet forward (860M parameters, random weights), fp32 on the CPU with
 // every core: batch 8 at 32x32 latents and batch 2 at 64x64. Reports the median of a few runs (wall time)
 // and the process CPU time of all threads.
-// It starts itself again with OMP_WAIT_POLICY=PASSIVE unless the environment chose a wait policy
-// (see nn/runtime.h): set OMP_WAIT_POLICY=ACTIVE or GOMP_SPINCOUNT to measure libgomp's spinning.
+// Matrix products run in the OpenMP build of OpenBLAS (see the RPATH note in CMakeLists.txt); `ldd
+// build/bench/bench_unet | grep blas` shows which build a run loads.
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
 #include <torch/torch.h>
@@ -67,7 +67,6 @@ BENCHMARK(BM_UNetForward)
 }  // namespace
 
 int main(int argc, char** argv) {
-  u3d::nn::restart_with_passive_openmp_waits(argv);  // as the CLI does
   u3d::nn::configure_torch_threads();  // every core, and libtorch's fastest kernels (as the CLI sets up)
   // Random weights can drive values into denormals, which would measure the FPU's slow path.
   at::globalContext().setFlushDenormal(true);

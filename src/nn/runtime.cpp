@@ -2,8 +2,6 @@
 
 #include <ATen/Parallel.h>
 
-#include <unistd.h>
-
 #include <cstdlib>
 #include <mutex>
 
@@ -16,19 +14,6 @@ bool cpu_runs_avx512_kernels() {
   // What ATen's AVX-512 kernels are compiled for (its own detection in later versions checks these).
   return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
          __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("fma");
-}
-
-void restart_with_passive_openmp_waits(char** argv) {
-  // libtorch's OpenMP workers (libgomp) and OpenBLAS's own pthreads take turns on the same cores; by
-  // default an idle libgomp worker spins for milliseconds after each parallel region, right when
-  // OpenBLAS's threads need the core for the next matrix product. libgomp reads OMP_WAIT_POLICY only
-  // in its library constructor, before main(), and a setenv() from the executable's .preinit_array
-  // is lost (glibc sets `environ` again after it), so the only way to choose the policy for the
-  // user is to start the program again with it in the environment.
-  if (std::getenv("OMP_WAIT_POLICY") != nullptr || std::getenv("GOMP_SPINCOUNT") != nullptr) return;
-  setenv("OMP_WAIT_POLICY", "PASSIVE", 1);
-  execv("/proc/self/exe", argv);
-  unsetenv("OMP_WAIT_POLICY");  // no /proc: run on with libgomp's default
 }
 
 int configure_torch_threads(int threads) {

@@ -13,15 +13,6 @@ namespace u3d::nn {
 // Returns the intra-op thread count now in effect.
 int configure_torch_threads(int threads = 0);
 
-// Call in a program that runs the networks, before it does anything visible (first thing in main, or
-// at the start of the subcommand that runs them: no CLI subcommand does yet, and a restart costs a
-// second start-up, 0.7 s here, that programs without networks should not pay). Unless the
-// environment already sets OMP_WAIT_POLICY or GOMP_SPINCOUNT, it starts the program again (same argv, execv of
-// /proc/self/exe) with OMP_WAIT_POLICY=PASSIVE, so libgomp's idle workers sleep instead of spinning
-// against OpenBLAS's threads. bench_unet, batch 8 at 32x32 on 2 cores: about a third less CPU time.
-// Returns only when no restart was needed or possible.
-void restart_with_passive_openmp_waits(char** argv);
-
 // Whether this CPU has the instruction sets ATen's AVX-512 kernels use.
 bool cpu_runs_avx512_kernels();
 
