@@ -7,7 +7,7 @@
 namespace u3d {
 
 struct MeshTopology {
-  bool edge_manifold = false;    // every edge has at most two faces
+  bool edge_manifold = false;    // every edge has at most two faces, wound in opposite directions
   bool vertex_manifold = false;  // every vertex's faces form one fan
   bool watertight = false;       // every edge has exactly two faces: closed (self-intersection not tested)
   int components = 0;            // connected pieces (by shared edges)
