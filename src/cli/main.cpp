@@ -11,10 +11,6 @@
 #include "core/progress.h"
 #include "unique3d/version.h"
 
-#ifdef UNIQUE3D_WITH_TORCH
-#include "nn/runtime.h"
-#endif
-
 namespace u3d::cli {
 
 std::vector<CommandInfo>& command_registry() {
@@ -47,9 +43,6 @@ int main(int argc, char** argv) {
   set_progress_quiet(quiet);
   keep_freed_memory_for_reuse();
   configure_threads(threads);
-#ifdef UNIQUE3D_WITH_TORCH
-  nn::configure_torch_threads(threads);  // the networks use the same count as our OpenMP loops
-#endif
   try {
     for (auto& [sub, action] : actions)
       if (sub->parsed()) action();
