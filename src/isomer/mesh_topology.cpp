@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <numeric>
 
+#include "core/error.h"
 #include "isomer/remesh/edge_topology.h"
 
 namespace u3d {
@@ -40,6 +41,9 @@ struct DisjointSets {
 MeshTopology mesh_topology(const Mesh& mesh) {
   MeshTopology t;
   const std::vector<Vec3i>& faces = mesh.faces;
+  const int vertex_count = int(mesh.vertex_count());
+  for (const Vec3i& f : faces)
+    require((f.array() >= 0).all() && (f.array() < vertex_count).all(), "mesh topology: a face references a missing vertex");
   const EdgeTopology topo = build_edge_topology(faces, mesh.vertex_count());
   t.edge_manifold = t.watertight = true;
   // Corners (face * 3 + i) around the same vertex are joined across every edge two faces share; a

@@ -8,7 +8,7 @@
 #include "core/error.h"
 #include "isomer/loop_subdivision.h"
 #include "isomer/mesh_repair.h"
-#include "isomer/remesh/manifold_check.h"
+#include "isomer/mesh_topology.h"
 
 namespace u3d {
 
@@ -77,14 +77,6 @@ void drop_crumbs(Mesh& mesh, int min_faces) {
     for (int k = 0; k < 3; ++k) f[k] = new_index[f[k]];
 }
 
-double signed_volume(const Mesh& mesh) {
-  double v = 0.0;
-  for (const Vec3i& f : mesh.faces)
-    v += mesh.positions[f[0]].cast<double>().dot(
-        mesh.positions[f[1]].cast<double>().cross(mesh.positions[f[2]].cast<double>()));
-  return v / 6.0;
-}
-
 }  // namespace
 
 Mesh smooth_and_subdivide(const Mesh& input, const SurfaceCleanupOptions& options) {
@@ -96,8 +88,8 @@ Mesh smooth_and_subdivide(const Mesh& input, const SurfaceCleanupOptions& option
 
   // Loop subdivision needs a manifold (pymeshlab repairs non-manifold vertices and edges here too).
   // The optimisation stages already deliver one, outward: then the (Open3D, hash-map) repair is skipped.
-  if (!closed_manifold_problem(smoothed.faces, smoothed.positions.size()).empty() || signed_volume(smoothed) <= 0.0)
-    repair_to_closed_manifold(smoothed);
+  const MeshTopology topology = mesh_topology(smoothed);
+  if (!topology.closed_manifold() || topology.volume <= 0.0) repair_to_closed_manifold(smoothed);
   drop_crumbs(smoothed, options.min_component_faces);
   Mesh mesh = std::move(smoothed);
   const BoundingBox box = bounding_box(mesh.positions);

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include "core/error.h"
 #include "isomer/icosphere.h"
 
 namespace {
@@ -69,6 +70,12 @@ TEST(MeshTopology, ThirdFaceOnAnEdgeIsNotManifold) {
   const auto t = mesh_topology(m);
   EXPECT_FALSE(t.edge_manifold);
   EXPECT_FALSE(t.closed_manifold());
+}
+
+TEST(MeshTopology, RejectsAFaceWithAMissingVertex) {
+  Mesh m = tetrahedron(Vec3f(0, 0, 0), 0);
+  m.faces.push_back(Vec3i(0, 1, 7));
+  EXPECT_THROW(mesh_topology(m), u3d::Error);
 }
 
 }  // namespace
