@@ -67,7 +67,7 @@ BENCHMARK(BM_UNetForward)
 }  // namespace
 
 int main(int argc, char** argv) {
-  u3d::nn::configure_torch_threads();  // every core, and libtorch's fastest kernels (as the CLI sets up)
+  u3d::nn::configure_torch_threads();  // every core, and libtorch's fastest kernels
   // Random weights can drive values into denormals, which would measure the FPU's slow path.
   at::globalContext().setFlushDenormal(true);
   // By default three runs, aggregates only (the first run also pays for oneDNN's primitive set-up);
