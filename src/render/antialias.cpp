@@ -48,10 +48,12 @@ inline float cross2(float ax, float ay, float bx, float by) { return ax * by - a
 
 // Per face, bit i set when the edge opposite corner i is a silhouette in this view: the neighbouring
 // face folds back onto the same side of it, i.e. the "wing" triangle (opposite vertex, edge) has the
-// same screen orientation as the face. Border edges always are.
-std::vector<uint8_t> silhouette_edges(const std::vector<Vec3i>& faces, const EdgeNeighbors& neighbors,
-                                      const ScreenProjection& proj) {
-  std::vector<uint8_t> mask(faces.size());
+// same screen orientation as the face. Border edges always are. Face f's bits are at mask[f + 1] and
+// mask[0] = 0 stands for the background (face id -1), so pixel scans look up any face id unchecked.
+void silhouette_edges(const std::vector<Vec3i>& faces, const EdgeNeighbors& neighbors, const ScreenProjection& proj,
+                      std::vector<uint8_t>& mask) {
+  mask.resize(faces.size() + 1);
+  mask[0] = 0;
   for (size_t fi = 0; fi < faces.size(); ++fi) {
     const Vec3i& f = faces[fi];
     const Vec2f p[3] = {proj.pixel[f[0]], proj.pixel[f[1]], proj.pixel[f[2]]};
@@ -68,13 +70,12 @@ std::vector<uint8_t> silhouette_edges(const std::vector<Vec3i>& faces, const Edg
       const Vec2f& b = p[(i + 2) % 3];
       if (same_sign(cross2(a.x() - q.x(), a.y() - q.y(), b.x() - q.x(), b.y() - q.y()), bb)) bits |= uint8_t(1u << i);
     }
-    mask[fi] = bits;
+    mask[fi + 1] = bits;
   }
-  return mask;
 }
 
 // Analyses one pair of neighbouring pixels; returns false when nothing is blended.
-bool analyse_pair(const RasterBuffer& raster, const std::vector<Vec3i>& faces, const std::vector<uint8_t>& silhouette,
+bool analyse_pair(const RasterBuffer& raster, const std::vector<Vec3i>& faces, const uint8_t* silhouette,
                   const ScreenProjection& proj, int32_t p0, int32_t p1, bool down, AntialiasPair& out) {
   const int32_t t0 = raster.face_id[p0], t1 = raster.face_id[p1];
   // The nearer triangle owns the edge (the far one is occluded there, or background).
@@ -131,26 +132,30 @@ std::vector<AntialiasPair> find_antialias_pairs(const RasterBuffer& raster, cons
 void find_antialias_pairs(const RasterBuffer& raster, const std::vector<Vec3i>& faces, const EdgeNeighbors& neighbors,
                           const ScreenProjection& projection, std::vector<AntialiasPair>& pairs) {
   pairs.clear();
-  const std::vector<uint8_t> silhouette = silhouette_edges(faces, neighbors, projection);
+  thread_local std::vector<uint8_t> silhouette_storage;  // per view and frame: kept, not reallocated
+  silhouette_edges(faces, neighbors, projection, silhouette_storage);
+  const uint8_t* silhouette = silhouette_storage.data() + 1;  // indexable by face id, -1 included
   const int w = raster.width, h = raster.height;
   // Pairs differ in face id, so both pixels are background outside the footprint grown by one pixel.
   const PixelRect& r = raster.footprint;
   // Most pairs that differ in face id are interior edges between two faces with no silhouette edge:
-  // the edge found is always one of the nearer face's, so those are skipped before any analysis.
-  auto silhouette_bits = [&](int32_t face) -> uint8_t { return face >= 0 ? silhouette[size_t(face)] : 0; };
-  auto worth_analysing = [&](int32_t a, int32_t b) { return a != b && (silhouette_bits(a) | silhouette_bits(b)) != 0; };
+  // the edge found is always one of the nearer face's, so those are skipped before any analysis. The
+  // test is computed without branches: whether neighbouring ids differ is a coin flip inside the
+  // footprint, while a pair worth analysing is rare, so only that last test branches.
   AntialiasPair pair;
   for (int y = std::max(r.y0 - 1, 0); y <= r.y1; ++y) {
     const int32_t* row = raster.face_id.data() + size_t(y) * w;
-    const int32_t* below = y + 1 < h ? row + w : nullptr;
+    const int32_t* below = y + 1 < h ? row + w : row;  // the last row compares with itself: no pairs
+    const int x_end = std::min(r.x1, w - 2);  // pixels with a right neighbour
     for (int x = std::max(r.x0 - 1, 0); x <= r.x1; ++x) {
+      const int32_t a = row[x], right = x <= x_end ? row[x + 1] : a, down = below[x];
+      const uint8_t own = silhouette[a];
+      const bool across = (a != right) & ((own | silhouette[right]) != 0);
+      const bool along = (a != down) & ((own | silhouette[down]) != 0);
+      if (!(across | along)) continue;
       const int32_t p = y * w + x;
-      if (x + 1 < w && worth_analysing(row[x], row[x + 1]) &&
-          analyse_pair(raster, faces, silhouette, projection, p, p + 1, false, pair))
-        pairs.push_back(pair);
-      if (below && worth_analysing(row[x], below[x]) &&
-          analyse_pair(raster, faces, silhouette, projection, p, p + w, true, pair))
-        pairs.push_back(pair);
+      if (across && analyse_pair(raster, faces, silhouette, projection, p, p + 1, false, pair)) pairs.push_back(pair);
+      if (along && analyse_pair(raster, faces, silhouette, projection, p, p + w, true, pair)) pairs.push_back(pair);
     }
   }
 }
