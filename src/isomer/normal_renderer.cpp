@@ -45,7 +45,7 @@ NormalRenderer::NormalRenderer(std::vector<Camera> cameras) {
     v.image = Image(w, h, kChannels);
     v.grad_image = Image(w, h, kChannels);
     v.grad_color = Image(w, h, kChannels);
-    v.grad_bary.assign(size_t(w) * h, Vec2f::Zero());
+    if (!v.camera.orthographic) v.grad_bary.assign(size_t(w) * h, Vec2f::Zero());  // only perspective needs it
     v.listed.assign(size_t(w) * h, 0);
   }
 }
@@ -115,9 +115,15 @@ void NormalRenderer::backward(const std::vector<Vec3f>& positions, const std::ve
     v.screen_grad.reset(n);
     antialias_backward(v.pairs, v.color, faces, v.projection, v.grad_image, v.grad_color, v.screen_grad);
     v.grad_attributes.assign(n * kChannels, 0.f);
-    interpolate_backward(v.raster, v.covered, faces, attributes_.data(), kChannels, v.grad_color,
-                         v.grad_attributes.data(), &v.grad_bary);
-    barycentric_backward(v.raster, v.covered, faces, v.projection, v.grad_bary, v.screen_grad);
+    if (v.projection.orthographic) {  // the four views: one pass, sums per face
+      interpolate_barycentric_backward_orthographic(v.raster, v.covered, faces, attributes_.data(), kChannels,
+                                                    v.projection, v.grad_color, v.grad_attributes.data(),
+                                                    v.screen_grad);
+    } else {
+      interpolate_backward(v.raster, v.covered, faces, attributes_.data(), kChannels, v.grad_color,
+                           v.grad_attributes.data(), &v.grad_bary);
+      barycentric_backward(v.raster, v.covered, faces, v.projection, v.grad_bary, v.screen_grad);
+    }
     v.grad_positions.assign(n, Vec3f::Zero());
     add_world_gradient(v.projection, positions, v.screen_grad, v.grad_positions);
   }

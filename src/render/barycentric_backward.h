@@ -6,6 +6,7 @@
 #include <span>
 #include <vector>
 
+#include "core/image.h"
 #include "render/rasterizer.h"
 #include "render/screen_projection.h"
 
@@ -15,5 +16,18 @@ namespace u3d {
 void barycentric_backward(const RasterBuffer& raster, std::span<const int32_t> pixels, const std::vector<Vec3i>& faces,
                           const ScreenProjection& projection, const std::vector<Vec2f>& grad_bary,
                           ScreenGradient& screen);
+
+// Orthographic cameras only (projection.orthographic): interpolate_backward followed by
+// barycentric_backward in one pass over the pixels, for at most four channels. There the barycentrics
+// are affine in the pixel centre q, so both results only need, per face and channel, the sums of the
+// output gradient g and of g q: no per-pixel barycentric gradient is stored, and the vertices are
+// visited once per face instead of once per pixel. The attribute gradient uses the barycentrics of the
+// projected (unsnapped) vertices rather than the raster's stored ones; they differ by the raster's
+// 1/256-pixel vertex snapping. Adds into grad_attributes (vertex_count * channels) and `screen`.
+void interpolate_barycentric_backward_orthographic(const RasterBuffer& raster, std::span<const int32_t> pixels,
+                                                   const std::vector<Vec3i>& faces, const float* attributes,
+                                                   int channels, const ScreenProjection& projection,
+                                                   const Image& grad_out, float* grad_attributes,
+                                                   ScreenGradient& screen);
 
 }  // namespace u3d

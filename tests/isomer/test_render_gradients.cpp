@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 
+#include "core/error.h"
 #include "gradient_check.h"
 #include "isomer/icosphere.h"
 #include "isomer/normal_renderer.h"
@@ -26,12 +28,6 @@ Mesh lumpy_sphere(int subdivisions, float radius, unsigned seed) {
   return m;
 }
 
-std::vector<Camera> four_views(int res) {
-  std::vector<Camera> c;
-  for (View v : kAllViews) c.push_back(view_camera(v, res));
-  return c;
-}
-
 // Deterministic per-pixel weights in [-1, 1].
 Image random_weights(int w, int h, unsigned seed) {
   Image img(w, h, 4);
@@ -39,12 +35,6 @@ Image random_weights(int w, int h, unsigned seed) {
   std::uniform_real_distribution<float> u(-1.f, 1.f);
   for (float& x : img.data) x = u(rng);
   return img;
-}
-
-std::vector<int> all_vertices(size_t n) {
-  std::vector<int> v(n);
-  for (size_t i = 0; i < n; ++i) v[i] = int(i);
-  return v;
 }
 
 // Vertices lying on some view's silhouette: those of faces involved in anti-aliased pairs.
@@ -151,6 +141,55 @@ TEST(RenderGradients, BarycentricBackwardOrthographicAndPerspective) {
     // The rasterizer snaps vertices to 1/256 px, so finite differences carry noise ~ 1/step.
     EXPECT_LT(std::sqrt(err2 / ref2), cam.orthographic ? 0.02 : 0.06) << (cam.orthographic ? "orthographic" : "perspective");
   }
+}
+
+// The fused orthographic backward against the two separate steps it replaces. The screen gradient
+// uses the same sums, so only the summation order differs; the attribute gradient uses the
+// unsnapped vertices' barycentrics instead of the raster's (1/256 px snapping).
+TEST(RenderGradients, FusedOrthographicBackwardMatchesTheTwoSteps) {
+  const Mesh m = lumpy_sphere(3, 0.7f, 6);
+  const Camera cam = view_camera(View::Right, 96);
+  const RasterBuffer raster = rasterize(m.positions, m.faces, cam, RasterOptions{.cull_backfaces = true});
+  const std::vector<int32_t> pixels = covered_pixels(raster);
+  ASSERT_GT(pixels.size(), 2000u);
+  const ScreenProjection proj = project_to_screen(m.positions, cam);
+  const int ch = 4;
+  std::vector<float> attr(m.vertex_count() * ch);
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<float> u(0.f, 1.f);
+  for (float& a : attr) a = u(rng);
+  const Image grad = random_weights(96, 96, 9);
+
+  std::vector<float> attr_two(attr.size(), 0.f), attr_fused(attr.size(), 0.f);
+  std::vector<Vec2f> grad_bary(raster.pixel_count(), Vec2f::Zero());
+  ScreenGradient two, fused;
+  two.reset(m.vertex_count());
+  fused.reset(m.vertex_count());
+  interpolate_backward(raster, pixels, m.faces, attr.data(), ch, grad, attr_two.data(), &grad_bary);
+  barycentric_backward(raster, pixels, m.faces, proj, grad_bary, two);
+  interpolate_barycentric_backward_orthographic(raster, pixels, m.faces, attr.data(), ch, proj, grad, attr_fused.data(),
+                                                fused);
+
+  double err2 = 0, ref2 = 0;
+  for (size_t v = 0; v < m.vertex_count(); ++v) {
+    err2 += (two.pixel[v] - fused.pixel[v]).squaredNorm();
+    ref2 += two.pixel[v].squaredNorm();
+  }
+  ASSERT_GT(ref2, 0.0);
+  EXPECT_LT(std::sqrt(err2 / ref2), 2e-4) << "screen gradient";  // float sums of g q in another order
+  err2 = ref2 = 0;
+  for (size_t i = 0; i < attr.size(); ++i) {
+    err2 += std::pow(double(attr_two[i]) - attr_fused[i], 2);
+    ref2 += std::pow(double(attr_two[i]), 2);
+  }
+  ASSERT_GT(ref2, 0.0);
+  EXPECT_LT(std::sqrt(err2 / ref2), 1e-2) << "attribute gradient";
+
+  const Camera perspective = perspective_camera({0.8f, 0.6f, 2.5f}, 32, 32, 50.f);
+  EXPECT_THROW(interpolate_barycentric_backward_orthographic(raster, pixels, m.faces, attr.data(), ch,
+                                                             project_to_screen(m.positions, perspective), grad,
+                                                             attr_fused.data(), fused),
+               Error);
 }
 
 // The full renderer (normals + barycentrics + silhouettes) under a random linear image loss, one view
