@@ -116,7 +116,8 @@ void NormalRenderer::backward(const std::vector<Vec3f>& positions, const std::ve
     antialias_backward(v.pairs, v.color, faces, v.projection, v.grad_image, v.grad_color, v.screen_grad);
     v.grad_attributes.assign(n * kChannels, 0.f);
     if (v.projection.orthographic) {  // the four views: one pass, sums per face
-      interpolate_barycentric_backward_orthographic(v.raster, v.covered, faces, attributes_.data(), kChannels,
+      // Alpha is 1 at every vertex: it moves no barycentric, and its attribute gradient is not used.
+      interpolate_barycentric_backward_orthographic(v.raster, v.covered, faces, attributes_.data(), 3,
                                                     v.projection, v.grad_color, v.grad_attributes.data(),
                                                     v.screen_grad);
     } else {

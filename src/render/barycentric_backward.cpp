@@ -123,17 +123,17 @@ void fused_orthographic_backward(const RasterBuffer& raster, std::span<const int
     for (int j = 0; j < 3; ++j) {
       const int k = (j + 1) % 3, l = (j + 2) % 3;
       const float constant = cross2(a[k], a[l]) / area;
-      float* out = grad_attributes + size_t(c[j]) * kChannels;
+      float* out = grad_attributes + size_t(c[j]) * stride;
       for (int ch = 0; ch < kChannels; ++ch)
         out[ch] += constant * m.g[ch] + (cross2(a[l], m.q[ch]) - cross2(a[k], m.q[ch])) / area;
     }
     // Barycentrics: dL/d b_i at a pixel is sum_c g_c (attr_i - attr_0)_c, so its sums follow from the
     // channel sums.
-    const float* a0 = attributes + size_t(c[0]) * kChannels;
+    const float* a0 = attributes + size_t(c[0]) * stride;
     float G[2] = {0.f, 0.f};
     Vec2f Q[2] = {Vec2f::Zero(), Vec2f::Zero()};
     for (int i = 0; i < 2; ++i) {
-      const float* ai = attributes + size_t(c[i + 1]) * kChannels;
+      const float* ai = attributes + size_t(c[i + 1]) * stride;
       for (int ch = 0; ch < kChannels; ++ch) {
         const float d = ai[ch] - a0[ch];
         G[i] += d * m.g[ch];
@@ -197,7 +197,7 @@ void interpolate_barycentric_backward_orthographic(const RasterBuffer& raster, s
                                                    const Image& grad_out, float* grad_attributes,
                                                    ScreenGradient& screen) {
   require(projection.orthographic, "interpolate_barycentric_backward_orthographic: the camera is not orthographic");
-  require(grad_out.channels == channels, "interpolate_barycentric_backward_orthographic: gradient channels differ");
+  require(channels <= grad_out.channels, "interpolate_barycentric_backward_orthographic: more channels than the gradient has");
   switch (channels) {
     case 1: return fused_orthographic_backward<1>(raster, pixels, faces, attributes, projection, grad_out, grad_attributes, screen);
     case 2: return fused_orthographic_backward<2>(raster, pixels, faces, attributes, projection, grad_out, grad_attributes, screen);

@@ -23,7 +23,8 @@ void barycentric_backward(const RasterBuffer& raster, std::span<const int32_t> p
 // output gradient g and of g q: no per-pixel barycentric gradient is stored, and the vertices are
 // visited once per face instead of once per pixel. The attribute gradient uses the barycentrics of the
 // projected (unsnapped) vertices rather than the raster's stored ones; they differ by the raster's
-// 1/256-pixel vertex snapping. Adds into grad_attributes (vertex_count * channels) and `screen`.
+// 1/256-pixel vertex snapping. Only the first `channels` channels are used; attributes and
+// grad_attributes hold grad_out.channels values per vertex. Adds into grad_attributes and `screen`.
 void interpolate_barycentric_backward_orthographic(const RasterBuffer& raster, std::span<const int32_t> pixels,
                                                    const std::vector<Vec3i>& faces, const float* attributes,
                                                    int channels, const ScreenProjection& projection,

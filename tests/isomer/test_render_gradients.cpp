@@ -185,6 +185,20 @@ TEST(RenderGradients, FusedOrthographicBackwardMatchesTheTwoSteps) {
   ASSERT_GT(ref2, 0.0);
   EXPECT_LT(std::sqrt(err2 / ref2), 1e-2) << "attribute gradient";
 
+  // A constant last channel (the renderer's alpha) moves nothing: leaving it out changes no result.
+  for (size_t v = 0; v < m.vertex_count(); ++v) attr[v * ch + 3] = 1.f;
+  std::vector<float> attr_all(attr.size(), 0.f), attr_three(attr.size(), 0.f);
+  ScreenGradient all, three;
+  all.reset(m.vertex_count());
+  three.reset(m.vertex_count());
+  interpolate_barycentric_backward_orthographic(raster, pixels, m.faces, attr.data(), 4, proj, grad, attr_all.data(), all);
+  interpolate_barycentric_backward_orthographic(raster, pixels, m.faces, attr.data(), 3, proj, grad, attr_three.data(),
+                                                three);
+  for (size_t v = 0; v < m.vertex_count(); ++v) {
+    EXPECT_EQ(all.pixel[v], three.pixel[v]) << "vertex " << v;
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(attr_all[v * ch + c], attr_three[v * ch + c]) << "vertex " << v;
+  }
+
   const Camera perspective = perspective_camera({0.8f, 0.6f, 2.5f}, 32, 32, 50.f);
   EXPECT_THROW(interpolate_barycentric_backward_orthographic(raster, pixels, m.faces, attr.data(), ch,
                                                              project_to_screen(m.positions, perspective), grad,
