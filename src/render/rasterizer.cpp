@@ -8,6 +8,7 @@
 // triangles sharing an edge (same snapped vertices) cover every pixel centre exactly once.
 #include "render/rasterizer.h"
 
+#include <emmintrin.h>
 #include <omp.h>
 
 #include <algorithm>
@@ -29,6 +30,8 @@ constexpr int kTileSize = 1 << kTileBits;
 // Triangles at most this many pixels wide (within a tile) test every pixel of their bounding box;
 // wider ones solve each row for its covered span.
 constexpr int kNarrowSpan = 8;
+// Triangles at most this many pixels across (and within a tile) are tested as one block of SSE2 lanes.
+constexpr int kBlockSize = 4;
 // Vertices further than this from the image (in pixels) are clipped away, which bounds fixed-point
 // coordinates by 2^22 and edge-function products by 2^46: far from int64 overflow.
 constexpr float kGuardBandPixels = 16384.f;
@@ -238,6 +241,39 @@ inline void draw_in_tile(const ScreenTriangle& t, const CornerBary* clipped_corn
     }
   };
   const int span_max = xe - xs;
+  const int64_t extent_x = std::max({t.x[0], t.x[1], t.x[2]}) - std::min({t.x[0], t.x[1], t.x[2]});
+  const int64_t extent_y = std::max({t.y[0], t.y[1], t.y[2]}) - std::min({t.y[0], t.y[1], t.y[2]});
+  if (span_max < kBlockSize && ye - ys < kBlockSize && extent_x <= kBlockSize * kSubpixel &&
+      extent_y <= kBlockSize * kSubpixel) {
+    // Small (most triangles of a finely remeshed surface): all at most 4x4 pixels are tested at once,
+    // four per SSE2 compare, into a bit mask whose set bits are then shaded. The scalar loops below
+    // branch on every pixel's inside test, a coin flip the CPU mispredicts about every other pixel.
+    // The triangle itself spans at most 4 pixels (not just its part in this tile), so every edge
+    // function here is below 2^22 in magnitude: 32-bit lanes are exact and give the same signs as the
+    // 64-bit values, which `shade` still receives.
+    uint32_t inside = 0;
+    __m128i e[3], dy[3];
+    for (int k = 0; k < 3; ++k) {
+      const int32_t base = int32_t(row[k]), sx = int32_t(step_x[k]);
+      e[k] = _mm_setr_epi32(base, base + sx, base + 2 * sx, base + 3 * sx);
+      dy[k] = _mm_set1_epi32(int32_t(step_y[k]));
+    }
+    const uint32_t lanes = (1u << (span_max + 1)) - 1;  // columns inside the block's x range
+    for (int j = 0; j <= ye - ys; ++j) {
+      const __m128i any_negative = _mm_or_si128(_mm_or_si128(e[0], e[1]), e[2]);
+      const uint32_t outside = uint32_t(_mm_movemask_ps(_mm_castsi128_ps(any_negative)));
+      inside |= (~outside & lanes) << (4 * j);
+      for (int k = 0; k < 3; ++k) e[k] = _mm_add_epi32(e[k], dy[k]);
+    }
+    while (inside != 0) {
+      const int bit = __builtin_ctz(inside);
+      inside &= inside - 1;
+      const int i = bit & 3, j = bit >> 2;
+      shade(size_t(ys + j) * width + size_t(xs + i), row[0] + step_x[0] * i + step_y[0] * j,
+            row[1] + step_x[1] * i + step_y[1] * j, row[2] + step_x[2] * i + step_y[2] * j);
+    }
+    return;
+  }
   if (span_max < kNarrowSpan) {  // narrow: testing every pixel is cheaper than solving for the span
     for (int y = ys; y <= ye; ++y, row[0] += step_y[0], row[1] += step_y[1], row[2] += step_y[2]) {
       int64_t e0 = row[0], e1 = row[1], e2 = row[2];

@@ -150,6 +150,84 @@ TEST(Rasterizer, SharedEdgesCoverEachPixelExactlyOnce) {
     }
 }
 
+// The same with cells of 3 px (triangles of at most 4x4 pixels take the rasterizer's SSE2 block path),
+// jittered by half pixels so edges run through pixel centres, across a tile border (x = 32).
+TEST(Rasterizer, SmallSharedEdgeTrianglesCoverEachPixelExactlyOnce) {
+  const int res = 48;
+  Camera cam = view_camera(View::Front, res);
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> jitter(-1, 1);
+  const int n = 12;  // n x n cells of 3 px, from pixel 4 to 40
+  std::vector<Vec3f> p;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      bool border = i == 0 || j == 0 || i == n || j == n;
+      float px = 4.f + 3.f * i + (border ? 0.5f : 0.5f + 0.5f * jitter(rng));
+      float py = 4.f + 3.f * j + (border ? 0.5f : 0.5f + 0.5f * jitter(rng));
+      p.push_back(pixel_to_world(px, py, res));
+    }
+  std::vector<Vec3i> f;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      int a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+      if ((i + j) % 2) {
+        f.push_back({a, c, b});
+        f.push_back({b, c, d});
+      } else {
+        f.push_back({a, c, d});
+        f.push_back({a, d, b});
+      }
+    }
+  std::vector<int> counts = coverage_counts(p, f, cam);
+  for (int y = 0; y < res; ++y)
+    for (int x = 0; x < res; ++x) {
+      // The square spans pixel coordinates [4.5, 40.5]: the centres on its left and top sides belong to it.
+      bool inside = x >= 4 && x <= 39 && y >= 4 && y <= 39;
+      EXPECT_EQ(counts[size_t(y) * res + x], inside ? 1 : 0) << x << "," << y;
+    }
+}
+
+// Tiny random triangles (at most 4 px across, some on tile borders): coverage agrees with the geometry
+// wherever the centre is clearly inside or outside, and barycentrics reproject to the pixel centre.
+TEST(Rasterizer, SmallTrianglesMatchGeometry) {
+  const int res = 64;
+  Camera cam = view_camera(View::Front, res);
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<float> corner(2.f, res - 6.f), offset(0.f, 4.f);
+  for (int trial = 0; trial < 2000; ++trial) {
+    const float cx = trial % 4 == 0 ? 30.f + offset(rng) : corner(rng), cy = corner(rng);  // some straddle x = 32
+    Eigen::Vector2d v[3];
+    std::vector<Vec3f> p(3);
+    for (int k = 0; k < 3; ++k) {
+      v[k] = Eigen::Vector2d(cx + offset(rng), cy + offset(rng));
+      p[k] = pixel_to_world(float(v[k].x()), float(v[k].y()), res);
+    }
+    const RasterBuffer buf = rasterize(p, {Vec3i(0, 1, 2)}, cam);
+    const double s = cross2(v[0], v[1], v[2]) > 0 ? 1 : -1;
+    for (int y = 0; y < res; ++y)
+      for (int x = 0; x < res; ++x) {
+        const Eigen::Vector2d c(x + 0.5, y + 0.5);
+        double margin = 1e30;
+        bool inside = true;
+        for (int k = 0; k < 3; ++k) {
+          const auto& a = v[k];
+          const auto& b = v[(k + 1) % 3];
+          const double e = s * cross2(a, b, c) / (b - a).norm();
+          margin = std::min(margin, std::abs(e));
+          inside = inside && e > 0;
+        }
+        const size_t i = size_t(y) * res + x;
+        if (margin > 0.01) {
+          ASSERT_EQ(buf.covered(i), inside) << "trial " << trial << " pixel " << x << "," << y;
+        }
+        if (!buf.covered(i)) continue;
+        const float b1 = buf.bary[i].x(), b2 = buf.bary[i].y();
+        const Eigen::Vector2d q = (1.0 - b1 - b2) * v[0] + double(b1) * v[1] + double(b2) * v[2];
+        ASSERT_LT((q - c).norm(), 0.02) << "trial " << trial << " pixel " << x << "," << y;
+      }
+  }
+}
+
 // Fan of 8 triangles around a vertex on a pixel centre, spokes along axes and diagonals (edges through
 // many pixel centres), seen from the front (front faces) and from the back (back faces).
 TEST(Rasterizer, FanAroundVertexCoversEachPixelExactlyOnce) {
@@ -256,8 +334,12 @@ TEST(Rasterizer, TrianglesCrossingTheNearPlaneAreClipped) {
   for (int y = 0; y < res; ++y)
     for (int x = 0; x < res; ++x) {
       size_t i = size_t(y) * res + x;
-      if (y >= res / 2 + 2) EXPECT_TRUE(buf.covered(i)) << x << "," << y;
-      if (y < res / 2) EXPECT_FALSE(buf.covered(i)) << x << "," << y;
+      if (y >= res / 2 + 2) {
+        EXPECT_TRUE(buf.covered(i)) << x << "," << y;
+      }
+      if (y < res / 2) {
+        EXPECT_FALSE(buf.covered(i)) << x << "," << y;
+      }
       if (!buf.covered(i)) continue;
       Vec2f b = buf.bary[i];
       Vec3f q = (1 - b.x() - b.y()) * p[0] + b.x() * p[1] + b.y() * p[2];
