@@ -84,6 +84,7 @@ struct ScreenTriangle {
   int32_t face;
   int32_t corners;                 // kCornersIdentity/kCornersSwapped, or index into clipped corner table
   int16_t px0, py0, px1, py1;      // pixel range that may be covered, inclusive, never empty
+  bool small;                      // at most kBlockSize pixels across in x and y (vertices, not range)
 };
 
 // Barycentrics (b1, b2) w.r.t. the original face of the three vertices of a clipped sub-triangle.
@@ -133,6 +134,7 @@ bool setup_triangle(const ScreenVertex* v, int32_t face, int32_t corners, int wi
   }
   t.face = face;
   t.corners = corners == kCornersIdentity && front ? kCornersSwapped : corners;
+  t.small = max_x - min_x <= kBlockSize * kSubpixel && max_y - min_y <= kBlockSize * kSubpixel;
   t.px0 = int16_t(px0);
   t.px1 = int16_t(px1);
   t.py0 = int16_t(py0);
@@ -241,10 +243,7 @@ inline void draw_in_tile(const ScreenTriangle& t, const CornerBary* clipped_corn
     }
   };
   const int span_max = xe - xs;
-  const int64_t extent_x = std::max({t.x[0], t.x[1], t.x[2]}) - std::min({t.x[0], t.x[1], t.x[2]});
-  const int64_t extent_y = std::max({t.y[0], t.y[1], t.y[2]}) - std::min({t.y[0], t.y[1], t.y[2]});
-  if (span_max < kBlockSize && ye - ys < kBlockSize && extent_x <= kBlockSize * kSubpixel &&
-      extent_y <= kBlockSize * kSubpixel) {
+  if (t.small && span_max < kBlockSize && ye - ys < kBlockSize) {
     // Small (most triangles of a finely remeshed surface): all at most 4x4 pixels are tested at once,
     // four per SSE2 compare, into a bit mask whose set bits are then shaded. The scalar loops below
     // branch on every pixel's inside test, a coin flip the CPU mispredicts about every other pixel.
@@ -258,19 +257,22 @@ inline void draw_in_tile(const ScreenTriangle& t, const CornerBary* clipped_corn
       e[k] = _mm_setr_epi32(base, base + sx, base + 2 * sx, base + 3 * sx);
       dy[k] = _mm_set1_epi32(int32_t(step_y[k]));
     }
+    alignas(16) int32_t values[kBlockSize][3][kBlockSize];  // [row][edge][column]
     const uint32_t lanes = (1u << (span_max + 1)) - 1;  // columns inside the block's x range
     for (int j = 0; j <= ye - ys; ++j) {
       const __m128i any_negative = _mm_or_si128(_mm_or_si128(e[0], e[1]), e[2]);
       const uint32_t outside = uint32_t(_mm_movemask_ps(_mm_castsi128_ps(any_negative)));
       inside |= (~outside & lanes) << (4 * j);
-      for (int k = 0; k < 3; ++k) e[k] = _mm_add_epi32(e[k], dy[k]);
+      for (int k = 0; k < 3; ++k) {
+        _mm_store_si128(reinterpret_cast<__m128i*>(values[j][k]), e[k]);
+        e[k] = _mm_add_epi32(e[k], dy[k]);
+      }
     }
     while (inside != 0) {
       const int bit = __builtin_ctz(inside);
       inside &= inside - 1;
       const int i = bit & 3, j = bit >> 2;
-      shade(size_t(ys + j) * width + size_t(xs + i), row[0] + step_x[0] * i + step_y[0] * j,
-            row[1] + step_x[1] * i + step_y[1] * j, row[2] + step_x[2] * i + step_y[2] * j);
+      shade(size_t(ys + j) * width + size_t(xs + i), values[j][0][i], values[j][1][i], values[j][2][i]);
     }
     return;
   }
