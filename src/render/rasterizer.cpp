@@ -31,7 +31,7 @@ constexpr int kTileSize = 1 << kTileBits;
 // wider ones solve each row for its covered span.
 constexpr int kNarrowSpan = 8;
 // Triangles at most this many pixels across (and within a tile) are tested as one block of SSE2 lanes.
-constexpr int kBlockSize = 4;
+constexpr int kBlockSize = 8;
 // Vertices further than this from the image (in pixels) are clipped away, which bounds fixed-point
 // coordinates by 2^22 and edge-function products by 2^46: far from int64 overflow.
 constexpr float kGuardBandPixels = 16384.f;
@@ -196,6 +196,44 @@ void clip_face(const std::array<ClipVertex, 3>& face_vertices, uint8_t planes_hi
   }
 }
 
+// Shades the covered pixels of a block of (rows + 1) x (4 * kVectors) pixels starting at (xs, ys),
+// columns 0..span, given the edge functions at its first pixel (`row`) and their steps.
+template <int kVectors, typename Shade>
+inline void draw_block(const int64_t* row, const int64_t* step_x, const int64_t* step_y, int xs, int ys, int span,
+                       int rows, int width, Shade&& shade) {
+  constexpr int kColumns = 4 * kVectors;
+  __m128i e[3][kVectors], dy[3];
+  for (int k = 0; k < 3; ++k) {
+    const int32_t base = int32_t(row[k]), sx = int32_t(step_x[k]);
+    for (int v = 0; v < kVectors; ++v) {
+      const int32_t first = base + 4 * v * sx;
+      e[k][v] = _mm_setr_epi32(first, first + sx, first + 2 * sx, first + 3 * sx);
+    }
+    dy[k] = _mm_set1_epi32(int32_t(step_y[k]));
+  }
+  alignas(16) int32_t values[kBlockSize][3][kColumns];  // [row][edge][column]
+  const uint64_t columns = (uint64_t(1) << (span + 1)) - 1;
+  uint64_t inside = 0;  // bit j * 8 + i: pixel (xs + i, ys + j)
+  for (int j = 0; j <= rows; ++j) {
+    uint64_t outside = 0;
+    for (int v = 0; v < kVectors; ++v) {
+      const __m128i any_negative = _mm_or_si128(_mm_or_si128(e[0][v], e[1][v]), e[2][v]);
+      outside |= uint64_t(_mm_movemask_ps(_mm_castsi128_ps(any_negative))) << (4 * v);
+      for (int k = 0; k < 3; ++k) {
+        _mm_store_si128(reinterpret_cast<__m128i*>(values[j][k] + 4 * v), e[k][v]);
+        e[k][v] = _mm_add_epi32(e[k][v], dy[k]);
+      }
+    }
+    inside |= (~outside & columns) << (8 * j);
+  }
+  while (inside != 0) {
+    const int bit = __builtin_ctzll(inside);
+    inside &= inside - 1;
+    const int i = bit & 7, j = bit >> 3;
+    shade(size_t(ys + j) * width + size_t(xs + i), values[j][0][i], values[j][1][i], values[j][2][i]);
+  }
+}
+
 // Draws one triangle into the pixels of a tile (pixel rectangle [x0,x1] x [y0,y1]).
 inline void draw_in_tile(const ScreenTriangle& t, const CornerBary* clipped_corners, int x0, int y0, int x1, int y1,
                          RasterBuffer& buf) {
@@ -244,36 +282,16 @@ inline void draw_in_tile(const ScreenTriangle& t, const CornerBary* clipped_corn
   };
   const int span_max = xe - xs;
   if (t.small && span_max < kBlockSize && ye - ys < kBlockSize) {
-    // Small (most triangles of a finely remeshed surface): all at most 4x4 pixels are tested at once,
+    // Small (most triangles of a finely remeshed surface): all at most 8x8 pixels are tested at once,
     // four per SSE2 compare, into a bit mask whose set bits are then shaded. The scalar loops below
     // branch on every pixel's inside test, a coin flip the CPU mispredicts about every other pixel.
-    // The triangle itself spans at most 4 pixels (not just its part in this tile), so every edge
-    // function here is below 2^22 in magnitude: 32-bit lanes are exact and give the same signs as the
-    // 64-bit values, which `shade` still receives.
-    uint32_t inside = 0;
-    __m128i e[3], dy[3];
-    for (int k = 0; k < 3; ++k) {
-      const int32_t base = int32_t(row[k]), sx = int32_t(step_x[k]);
-      e[k] = _mm_setr_epi32(base, base + sx, base + 2 * sx, base + 3 * sx);
-      dy[k] = _mm_set1_epi32(int32_t(step_y[k]));
-    }
-    alignas(16) int32_t values[kBlockSize][3][kBlockSize];  // [row][edge][column]
-    const uint32_t lanes = (1u << (span_max + 1)) - 1;  // columns inside the block's x range
-    for (int j = 0; j <= ye - ys; ++j) {
-      const __m128i any_negative = _mm_or_si128(_mm_or_si128(e[0], e[1]), e[2]);
-      const uint32_t outside = uint32_t(_mm_movemask_ps(_mm_castsi128_ps(any_negative)));
-      inside |= (~outside & lanes) << (4 * j);
-      for (int k = 0; k < 3; ++k) {
-        _mm_store_si128(reinterpret_cast<__m128i*>(values[j][k]), e[k]);
-        e[k] = _mm_add_epi32(e[k], dy[k]);
-      }
-    }
-    while (inside != 0) {
-      const int bit = __builtin_ctz(inside);
-      inside &= inside - 1;
-      const int i = bit & 3, j = bit >> 2;
-      shade(size_t(ys + j) * width + size_t(xs + i), values[j][0][i], values[j][1][i], values[j][2][i]);
-    }
+    // The triangle itself spans at most 8 pixels (not just its part in this tile), so every edge
+    // function here is below 2^24 in magnitude: 32-bit lanes are exact and give the same signs as the
+    // 64-bit values, which `shade` receives.
+    if (span_max < 4)
+      draw_block<1>(row, step_x, step_y, xs, ys, span_max, ye - ys, width, shade);
+    else
+      draw_block<2>(row, step_x, step_y, xs, ys, span_max, ye - ys, width, shade);
     return;
   }
   if (span_max < kNarrowSpan) {  // narrow: testing every pixel is cheaper than solving for the span

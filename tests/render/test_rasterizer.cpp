@@ -187,19 +187,21 @@ TEST(Rasterizer, SmallSharedEdgeTrianglesCoverEachPixelExactlyOnce) {
     }
 }
 
-// Tiny random triangles (at most 4 px across, some on tile borders): coverage agrees with the geometry
-// wherever the centre is clearly inside or outside, and barycentrics reproject to the pixel centre.
+// Small random triangles (at most 4 or 8 px across, the rasterizer's one- and two-vector blocks; some
+// on tile borders): coverage agrees with the geometry wherever the centre is clearly inside or
+// outside, and barycentrics reproject to the pixel centre.
 TEST(Rasterizer, SmallTrianglesMatchGeometry) {
   const int res = 64;
   Camera cam = view_camera(View::Front, res);
   std::mt19937 rng(12);
-  std::uniform_real_distribution<float> corner(2.f, res - 6.f), offset(0.f, 4.f);
+  std::uniform_real_distribution<float> corner(2.f, res - 10.f), unit(0.f, 1.f);
   for (int trial = 0; trial < 2000; ++trial) {
-    const float cx = trial % 4 == 0 ? 30.f + offset(rng) : corner(rng), cy = corner(rng);  // some straddle x = 32
+    const float size = trial % 2 == 0 ? 4.f : 8.f;
+    const float cx = trial % 4 < 2 ? 32.f - size * unit(rng) : corner(rng), cy = corner(rng);  // some straddle x = 32
     Eigen::Vector2d v[3];
     std::vector<Vec3f> p(3);
     for (int k = 0; k < 3; ++k) {
-      v[k] = Eigen::Vector2d(cx + offset(rng), cy + offset(rng));
+      v[k] = Eigen::Vector2d(cx + size * unit(rng), cy + size * unit(rng));
       p[k] = pixel_to_world(float(v[k].x()), float(v[k].y()), res);
     }
     const RasterBuffer buf = rasterize(p, {Vec3i(0, 1, 2)}, cam);
