@@ -109,37 +109,45 @@ TEST(Rasterizer, CoverageMatchesGeometryForRandomTriangles) {
   }
 }
 
-// A grid of jittered triangles whose vertices and edges often pass exactly through pixel centres:
-// every pixel of the square is covered exactly once, none outside it.
-TEST(Rasterizer, SharedEdgesCoverEachPixelExactlyOnce) {
-  const int res = 40;
-  Camera cam = view_camera(View::Front, res);
-  std::mt19937 rng(3);
-  std::uniform_int_distribution<int> jitter(-3, 3);
-  const int n = 4;  // n x n cells of 8 px, from pixel 4 to 36
-  std::vector<Vec3f> p;
+// n x n square cells of `cell` px starting at pixel 4, cut along alternating diagonals. Border vertices
+// sit at pixel centres; interior ones move by `shift` + half a pixel times a random integer in
+// [-max_jitter, max_jitter], so vertices and edges often pass exactly through pixel centres.
+struct Grid {
+  std::vector<Vec3f> positions;
+  std::vector<Vec3i> faces;
+};
+Grid jittered_grid(int res, int n, float cell, float shift, int max_jitter, std::mt19937& rng) {
+  std::uniform_int_distribution<int> jitter(-max_jitter, max_jitter);
+  Grid g;
   for (int j = 0; j <= n; ++j)
     for (int i = 0; i <= n; ++i) {
       bool border = i == 0 || j == 0 || i == n || j == n;
-      // Vertices at pixel centres or pixel corners (multiples of half a pixel).
-      float px = 4.f + 8.f * i + (border ? 0.5f : 0.5f * jitter(rng));
-      float py = 4.f + 8.f * j + (border ? 0.5f : 0.5f * jitter(rng));
-      p.push_back(pixel_to_world(px, py, res));
+      float px = 4.f + cell * i + (border ? 0.5f : shift + 0.5f * jitter(rng));
+      float py = 4.f + cell * j + (border ? 0.5f : shift + 0.5f * jitter(rng));
+      g.positions.push_back(pixel_to_world(px, py, res));
     }
-  std::vector<Vec3i> f;
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i) {
       int a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
       if ((i + j) % 2) {
-        f.push_back({a, c, b});
-        f.push_back({b, c, d});
+        g.faces.push_back({a, c, b});
+        g.faces.push_back({b, c, d});
       } else {
-        f.push_back({a, c, d});
-        f.push_back({a, d, b});
+        g.faces.push_back({a, c, d});
+        g.faces.push_back({a, d, b});
       }
     }
-  std::vector<int> counts = coverage_counts(p, f, cam);
-  RasterBuffer all = rasterize(p, f, cam);
+  return g;
+}
+
+// Jittered 8 px cells: every pixel of the square is covered exactly once, none outside it.
+TEST(Rasterizer, SharedEdgesCoverEachPixelExactlyOnce) {
+  const int res = 40;
+  Camera cam = view_camera(View::Front, res);
+  std::mt19937 rng(3);
+  const Grid grid = jittered_grid(res, 4, 8.f, 0.f, 3, rng);  // 4 x 4 cells from pixel 4 to 36
+  std::vector<int> counts = coverage_counts(grid.positions, grid.faces, cam);
+  RasterBuffer all = rasterize(grid.positions, grid.faces, cam);
   for (int y = 0; y < res; ++y)
     for (int x = 0; x < res; ++x) {
       // The square spans pixel coordinates [4.5, 36.5]: centres 5.5 .. 35.5 are inside, 4.5 and 36.5
@@ -150,35 +158,14 @@ TEST(Rasterizer, SharedEdgesCoverEachPixelExactlyOnce) {
     }
 }
 
-// The same with cells of 3 px (triangles of at most 4x4 pixels take the rasterizer's SSE2 block path),
-// jittered by half pixels so edges run through pixel centres, across a tile border (x = 32).
+// The same with cells of 3 px (triangles small enough for the rasterizer's SSE2 block path), across a
+// tile border (x = 32).
 TEST(Rasterizer, SmallSharedEdgeTrianglesCoverEachPixelExactlyOnce) {
   const int res = 48;
   Camera cam = view_camera(View::Front, res);
   std::mt19937 rng(11);
-  std::uniform_int_distribution<int> jitter(-1, 1);
-  const int n = 12;  // n x n cells of 3 px, from pixel 4 to 40
-  std::vector<Vec3f> p;
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) {
-      bool border = i == 0 || j == 0 || i == n || j == n;
-      float px = 4.f + 3.f * i + (border ? 0.5f : 0.5f + 0.5f * jitter(rng));
-      float py = 4.f + 3.f * j + (border ? 0.5f : 0.5f + 0.5f * jitter(rng));
-      p.push_back(pixel_to_world(px, py, res));
-    }
-  std::vector<Vec3i> f;
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      int a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
-      if ((i + j) % 2) {
-        f.push_back({a, c, b});
-        f.push_back({b, c, d});
-      } else {
-        f.push_back({a, c, d});
-        f.push_back({a, d, b});
-      }
-    }
-  std::vector<int> counts = coverage_counts(p, f, cam);
+  const Grid grid = jittered_grid(res, 12, 3.f, 0.5f, 1, rng);  // 12 x 12 cells from pixel 4 to 40
+  const std::vector<int> counts = coverage_counts(grid.positions, grid.faces, cam);
   for (int y = 0; y < res; ++y)
     for (int x = 0; x < res; ++x) {
       // The square spans pixel coordinates [4.5, 40.5]: the centres on its left and top sides belong to it.
