@@ -8,8 +8,10 @@
 // triangles sharing an edge (same snapped vertices) cover every pixel centre exactly once.
 #include "render/rasterizer.h"
 
-#include <emmintrin.h>
 #include <omp.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include <algorithm>
 #include <array>
@@ -196,6 +198,7 @@ void clip_face(const std::array<ClipVertex, 3>& face_vertices, uint8_t planes_hi
   }
 }
 
+#if defined(__SSE2__)  // every x86-64 CPU; elsewhere small triangles take the scalar narrow path
 // Shades the covered pixels of a block of (rows + 1) x (4 * kVectors) pixels starting at (xs, ys),
 // columns 0..span, given the edge functions at its first pixel (`row`) and their steps.
 template <int kVectors, typename Shade>
@@ -233,6 +236,7 @@ inline void draw_block(const int64_t* row, const int64_t* step_x, const int64_t*
     shade(size_t(ys + j) * width + size_t(xs + i), values[j][0][i], values[j][1][i], values[j][2][i]);
   }
 }
+#endif
 
 // Draws one triangle into the pixels of a tile (pixel rectangle [x0,x1] x [y0,y1]).
 inline void draw_in_tile(const ScreenTriangle& t, const CornerBary* clipped_corners, int x0, int y0, int x1, int y1,
@@ -281,6 +285,7 @@ inline void draw_in_tile(const ScreenTriangle& t, const CornerBary* clipped_corn
     }
   };
   const int span_max = xe - xs;
+#if defined(__SSE2__)
   if (t.small && span_max < kBlockSize && ye - ys < kBlockSize) {
     // Small (most triangles of a finely remeshed surface): all at most 8x8 pixels are tested at once,
     // four per SSE2 compare, into a bit mask whose set bits are then shaded. The scalar loops below
@@ -294,6 +299,7 @@ inline void draw_in_tile(const ScreenTriangle& t, const CornerBary* clipped_corn
       draw_block<2>(row, step_x, step_y, xs, ys, span_max, ye - ys, width, shade);
     return;
   }
+#endif
   if (span_max < kNarrowSpan) {  // narrow: testing every pixel is cheaper than solving for the span
     for (int y = ys; y <= ye; ++y, row[0] += step_y[0], row[1] += step_y[1], row[2] += step_y[2]) {
       int64_t e0 = row[0], e1 = row[1], e2 = row[2];
