@@ -3,9 +3,9 @@
 #include <Eigen/Geometry>
 
 #include <cstdio>
-#include <numeric>
 
 #include "core/error.h"
+#include "isomer/disjoint_sets.h"
 #include "isomer/remesh/edge_topology.h"
 
 namespace u3d {
@@ -17,24 +17,6 @@ std::string MeshTopology::summary() const {
                 components, euler_characteristic, volume);
   return buf;
 }
-
-namespace {
-
-// Union-find with path halving; small enough to keep here.
-struct DisjointSets {
-  std::vector<int> parent;
-  explicit DisjointSets(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  int find(int x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(int a, int b) {
-    a = find(a), b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-};
-
-}  // namespace
 
 // Built on the remesher's edge topology rather than Open3D's checks: those build a hash map of edges
 // per question and took about 2 s on a 160k-face result, longer than some reconstruction stages.

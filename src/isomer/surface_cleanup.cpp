@@ -1,11 +1,11 @@
 #include "isomer/surface_cleanup.h"
 
 #include <algorithm>
-#include <numeric>
 
 #include <Eigen/Geometry>
 
 #include "core/error.h"
+#include "isomer/disjoint_sets.h"
 #include "isomer/loop_subdivision.h"
 #include "isomer/mesh_repair.h"
 #include "isomer/mesh_topology.h"
@@ -46,23 +46,17 @@ double mean_edge_length(const Mesh& mesh) {
   return count ? total / double(count) : 0.0;
 }
 
-int find_root(std::vector<int>& parent, int v) {
-  while (parent[v] != v) v = parent[v] = parent[parent[v]];
-  return v;
-}
-
 // Removes connected pieces (faces joined through shared vertices) with fewer than min_faces faces,
 // never the largest piece.
 void drop_crumbs(Mesh& mesh, int min_faces) {
-  std::vector<int> parent(mesh.positions.size());
-  std::iota(parent.begin(), parent.end(), 0);
+  DisjointSets pieces(mesh.positions.size());
   for (const Vec3i& f : mesh.faces)
-    for (int k = 1; k < 3; ++k) parent[find_root(parent, f[k])] = find_root(parent, f[0]);
+    for (int k = 1; k < 3; ++k) pieces.unite(f[k], f[0]);
   std::vector<size_t> piece_faces(mesh.positions.size(), 0);
-  for (const Vec3i& f : mesh.faces) ++piece_faces[find_root(parent, f[0])];
+  for (const Vec3i& f : mesh.faces) ++piece_faces[pieces.find(f[0])];
   const size_t largest = size_t(std::max_element(piece_faces.begin(), piece_faces.end()) - piece_faces.begin());
   std::erase_if(mesh.faces, [&](const Vec3i& f) {
-    const size_t piece = size_t(find_root(parent, f[0]));
+    const size_t piece = size_t(pieces.find(f[0]));
     return piece != largest && piece_faces[piece] < size_t(std::max(min_faces, 0));
   });
   // Drop the vertices no face uses any more.
