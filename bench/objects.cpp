@@ -90,18 +90,20 @@ std::string fmt(double v, const char* spec) {
   return buf;
 }
 
-const std::vector<std::string> kMetricKeys = {"cd", "iou", "fscore", "psnr", "ssim", "seconds", "faces"};
+const std::vector<std::string> kMetricKeys = {"cd", "iou", "fscore", "fscore_visible", "hidden", "psnr", "ssim", "seconds", "faces"};
 
 std::string markdown(const json& rows, const json& means, const std::string& fscore_label) {
-  std::string md = "| object | res | variant | CD-L1 | Vol. IoU | " + fscore_label +
-                   " | PSNR | SSIM | time (s) | faces | status |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+  std::string md = "| object | res | variant | CD-L1 | Vol. IoU | " + fscore_label + " | " + fscore_label +
+                   " visible GT | hidden GT | PSNR | SSIM | time (s) | faces | status |\n"
+                   "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   auto cell = [](const json& row, const std::string& key, const char* spec) {
     return row.contains(key) && row[key].is_number() ? fmt(row[key].get<double>(), spec) : std::string("-");
   };
   auto line = [&](const json& r) {
     md += "| " + r["object"].get<std::string>() + " | " + std::to_string(r["resolution"].get<int>()) + " | " +
           r["variant"].get<std::string>() + " | " + cell(r, "cd", "%.5f") + " | " + cell(r, "iou", "%.4f") + " | " +
-          cell(r, "fscore", "%.4f") + " | " + cell(r, "psnr", "%.2f") + " | " + cell(r, "ssim", "%.4f") + " | " +
+          cell(r, "fscore", "%.4f") + " | " + cell(r, "fscore_visible", "%.4f") + " | " + cell(r, "hidden", "%.3f") +
+          " | " + cell(r, "psnr", "%.2f") + " | " + cell(r, "ssim", "%.4f") + " | " +
           cell(r, "seconds", "%.1f") + " | " + cell(r, "faces", "%.0f") + " | " + r["status"].get<std::string>() + " |\n";
   };
   for (const auto& r : rows) line(r);
@@ -249,6 +251,8 @@ int main(int argc, char** argv) {
         row["cd"] = m["chamfer"]["l1"];
         row["iou"] = m["volume_iou"]["iou"];
         row["fscore"] = m["fscore"][0]["fscore"];
+        row["fscore_visible"] = m["visible_gt"]["fscore"][0]["fscore"];
+        row["hidden"] = m["visible_gt"]["hidden_samples"].get<double>() / m["chamfer"]["samples_per_mesh"].get<double>();
         if (m["appearance"].is_object()) {
           row["psnr"] = m["appearance"]["psnr"];
           row["ssim"] = m["appearance"]["ssim"];
@@ -288,7 +292,8 @@ int main(int argc, char** argv) {
               {"means", means},
               {"notes", notes}};
   std::string md = "# Object benchmark\n\nFrame: " + doc["frame"].get<std::string>() + "; CD-L1, IoU, " + fscore_label +
-                   ", PSNR, SSIM as defined in docs/evaluation.md; time = wall time of `unique3d reconstruct`.\n";
+                   " (also over the GT surface visible from outside; hidden GT = share of GT samples no outside view sees), "
+                   "PSNR, SSIM as defined in docs/evaluation.md; time = wall time of `unique3d reconstruct`.\n";
   if (!perturb_args.empty()) md += "Views perturbed with `unique3d perturb " + perturb_args + "`.\n";
   md += "\n" + markdown(rows, means, fscore_label);
   if (!notes.empty()) {

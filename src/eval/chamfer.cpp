@@ -1,5 +1,6 @@
 #include "eval/chamfer.h"
 
+#include "core/error.h"
 #include "eval/surface_sampling.h"
 #include "eval/triangle_bvh.h"
 
@@ -27,7 +28,25 @@ SurfaceDistances surface_distances(const Mesh& pred, const Mesh& gt, size_t samp
   // Different seeds per side so two identical meshes are not trivially sampled at identical points.
   SurfaceSamples pred_samples = sample_surface(pred.positions, pred.faces, samples, seed);
   SurfaceSamples gt_samples = sample_surface(gt.positions, gt.faces, samples, seed + 1);
-  return {distances_to_surface(pred_samples.points, gt_bvh), distances_to_surface(gt_samples.points, pred_bvh)};
+  SurfaceDistances d{distances_to_surface(pred_samples.points, gt_bvh), distances_to_surface(gt_samples.points, pred_bvh),
+                     {}};
+  d.gt_samples = std::move(gt_samples);
+  return d;
+}
+
+SurfaceDistances keep_gt_samples(const SurfaceDistances& d, const std::vector<uint8_t>& keep) {
+  require(keep.size() == d.gt_to_pred.size(), "one keep flag per GT sample is needed");
+  SurfaceDistances out;
+  out.pred_to_gt = d.pred_to_gt;
+  for (size_t i = 0; i < keep.size(); ++i) {
+    if (!keep[i]) continue;
+    out.gt_to_pred.push_back(d.gt_to_pred[i]);
+    if (!d.gt_samples.points.empty()) {
+      out.gt_samples.points.push_back(d.gt_samples.points[i]);
+      out.gt_samples.faces.push_back(d.gt_samples.faces[i]);
+    }
+  }
+  return out;
 }
 
 ChamferDistance chamfer_distance(const SurfaceDistances& d) {

@@ -7,12 +7,14 @@
 #include <vector>
 
 #include "core/mesh.h"
+#include "eval/surface_sampling.h"
 
 namespace u3d {
 
 struct SurfaceDistances {
   std::vector<float> pred_to_gt;  // per sample on the prediction: distance to the GT surface
   std::vector<float> gt_to_pred;  // per sample on the GT: distance to the predicted surface
+  SurfaceSamples gt_samples;      // where gt_to_pred was measured
 };
 
 // `samples` points on each mesh (area-uniform, deterministic for a seed). Throws Error if a mesh
@@ -27,5 +29,8 @@ struct ChamferDistance {
 };
 
 ChamferDistance chamfer_distance(const SurfaceDistances& d);
+
+// The same distances with only the GT samples whose `keep` flag is set (e.g. the visible ones).
+SurfaceDistances keep_gt_samples(const SurfaceDistances& d, const std::vector<uint8_t>& keep);
 
 }  // namespace u3d

@@ -18,6 +18,13 @@ nlohmann::json mesh_json(const MeshSummary& m) {
           {"degenerate_faces", m.diagnostics.degenerate_faces}};
 }
 
+nlohmann::json fscores_json(const std::vector<FScore>& fscores) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& f : fscores)
+    out.push_back({{"threshold", f.threshold}, {"precision", f.precision}, {"recall", f.recall}, {"fscore", f.fscore}});
+  return out;
+}
+
 std::string format(const char* fmt, double value) {
   char buf[64];
   std::snprintf(buf, sizeof buf, fmt, value);
@@ -38,10 +45,14 @@ nlohmann::json report_to_json(const EvalReport& r) {
                   {"completeness", r.chamfer.completeness},
                   {"samples_per_mesh", r.options.surface_samples},
                   {"seed", r.options.seed}};
-  j["fscore"] = nlohmann::json::array();
-  for (const auto& f : r.fscores)
-    j["fscore"].push_back(
-        {{"threshold", f.threshold}, {"precision", f.precision}, {"recall", f.recall}, {"fscore", f.fscore}});
+  j["fscore"] = fscores_json(r.fscores);
+  j["visible_gt"] = {{"hidden_samples", r.gt_hidden_samples},
+                     {"directions", r.options.visibility.directions},
+                     {"resolution", r.options.visibility.resolution},
+                     {"chamfer", {{"l1", r.chamfer_visible.chamfer_l1},
+                                  {"l2", r.chamfer_visible.chamfer_l2},
+                                  {"completeness", r.chamfer_visible.completeness}}},
+                     {"fscore", fscores_json(r.fscores_visible)}};
   j["volume_iou"] = {{"iou", r.iou.iou},
                      {"resolution", r.iou.resolution},
                      {"pred_cells", r.iou.pred_cells},
@@ -84,6 +95,13 @@ std::string report_summary(const EvalReport& r) {
   for (const auto& f : r.fscores)
     s += "F-score@" + format("%-7g", f.threshold) + format("%.4f", f.fscore) + "  (precision " +
          format("%.4f", f.precision) + ", recall " + format("%.4f", f.recall) + ")\n";
+  s += "visible GT:     " + std::to_string(r.gt_hidden_samples) + " of " + std::to_string(r.options.surface_samples) +
+       " GT samples hidden from all " + std::to_string(r.options.visibility.directions) +
+       " outside views; without them Chamfer-L1 " + format("%.6f", r.chamfer_visible.chamfer_l1) + " (completeness " +
+       format("%.6f", r.chamfer_visible.completeness) + ")\n";
+  for (const auto& f : r.fscores_visible)
+    s += "  F-score@" + format("%-5g", f.threshold) + format("%.4f", f.fscore) + "  (recall " + format("%.4f", f.recall) +
+         ")\n";
   s += "volume IoU:     " + format("%.4f", r.iou.iou) + "  (" + std::to_string(r.iou.resolution) + "^3 grid)\n";
   if (r.appearance) {
     s += "PSNR:           " + format("%.3f", r.appearance->psnr) + " dB  (mean of 24 views)\n";

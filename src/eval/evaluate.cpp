@@ -1,5 +1,7 @@
 #include "eval/evaluate.h"
 
+#include <algorithm>
+
 #include "core/error.h"
 #include "core/progress.h"
 #include "render/shade.h"
@@ -43,6 +45,11 @@ EvalReport evaluate_meshes(Mesh pred, Mesh gt, const EvalOptions& options) {
   SurfaceDistances distances = surface_distances(pred, gt, options.surface_samples, options.seed);
   r.chamfer = chamfer_distance(distances);
   for (float t : options.fscore_thresholds) r.fscores.push_back(fscore(distances, t));
+  const std::vector<uint8_t> visible = visible_from_outside(gt, distances.gt_samples, options.visibility);
+  r.gt_hidden_samples = size_t(std::count(visible.begin(), visible.end(), uint8_t(0)));
+  const SurfaceDistances seen = keep_gt_samples(distances, visible);
+  r.chamfer_visible = chamfer_distance(seen);
+  for (float t : options.fscore_thresholds) r.fscores_visible.push_back(fscore(seen, t));
   r.iou = volume_iou(pred, gt, options.iou_resolution);
   if (r.iou.union_cells == 0) r.warnings.push_back("neither mesh encloses any volume: volume IoU is reported as 0");
   r.geometry_seconds = geometry_timer.finish();

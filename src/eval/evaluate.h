@@ -11,6 +11,7 @@
 #include "eval/chamfer.h"
 #include "eval/fscore.h"
 #include "eval/mesh_checks.h"
+#include "eval/visible_surface.h"
 #include "eval/volume_iou.h"
 
 namespace u3d {
@@ -27,6 +28,7 @@ struct EvalOptions {
   float gt_render_fill = 0;
   size_t surface_samples = 100000;  // per mesh
   std::vector<float> fscore_thresholds{0.01f, 0.02f, 0.05f};
+  VisibilityOptions visibility;  // which GT samples count as visible, for the visible-surface metrics
   int iou_resolution = 64;
   bool appearance = true;
   AppearanceOptions appearance_options;
@@ -46,6 +48,11 @@ struct EvalReport {
   MeshSummary pred, gt;
   ChamferDistance chamfer;
   std::vector<FScore> fscores;  // one per threshold
+  // The same two with only the GT samples visible from outside (eval/visible_surface.h): precision and
+  // accuracy are unchanged, completeness and recall leave out GT surface no camera can see.
+  size_t gt_hidden_samples = 0;
+  ChamferDistance chamfer_visible;
+  std::vector<FScore> fscores_visible;
   VolumeIou iou;
   std::optional<AppearanceMetrics> appearance;
   std::vector<std::string> warnings;
