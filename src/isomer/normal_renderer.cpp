@@ -69,15 +69,23 @@ void NormalRenderer::render(const std::vector<Vec3f>& positions, const std::vect
       std::copy_n(v.color.data.data() + size_t(p) * kChannels, kChannels, v.image.data.data() + size_t(p) * kChannels);
     find_antialias_pairs(v.raster, faces, neighbors_, v.projection, v.pairs);
     apply_antialias(v.pairs, v.color, v.image);
-    // Active = covered pixels plus each uncovered pixel a blend changes (once).
+    // Active = covered pixels plus each uncovered pixel a blend changes (once). Only blends move alpha
+    // off 1 (covered) or 0 (background), so counting the opaque pixels needs a look at them alone.
     v.active = v.covered;
+    v.blended.clear();
     for (const AntialiasPair& pair : v.pairs) {
       const int32_t target = pair.alpha > 0.f ? pair.pixel0 : pair.pixel1;
-      if (v.raster.covered(target) || v.listed[target]) continue;
-      v.active.push_back(target);
+      if (v.listed[target]) continue;
       v.listed[target] = 1;
+      v.blended.push_back(target);
+      if (!v.raster.covered(target)) v.active.push_back(target);
     }
-    for (size_t k = v.covered.size(); k < v.active.size(); ++k) v.listed[v.active[k]] = 0;
+    v.opaque_pixels = v.covered.size();
+    for (int32_t p : v.blended) {
+      v.listed[p] = 0;
+      v.opaque_pixels += size_t(v.image.data[size_t(p) * kChannels + 3] > 0.5f);
+      v.opaque_pixels -= size_t(v.raster.covered(p));
+    }
     zero_pixels(v.grad_image, v.active);
   }
   std::stable_sort(largest_first_.begin(), largest_first_.end(),

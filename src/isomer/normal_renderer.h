@@ -29,6 +29,7 @@ struct DifferentiableView {
   std::vector<int32_t> covered;        // pixels a triangle covers
   std::vector<int32_t> active;         // covered + background pixels changed by anti-aliasing
   std::vector<AntialiasPair> pairs;    // silhouette pixel pairs
+  size_t opaque_pixels = 0;            // active pixels with alpha > 0.5 (the mask of the normal loss)
   Image color;                         // RGBA before anti-aliasing (zero on background)
   Image image;                         // RGBA after anti-aliasing: what the losses see
   Image grad_image;                    // dL/d(image); losses fill it on `active` pixels
@@ -37,7 +38,8 @@ struct DifferentiableView {
   std::vector<Vec2f> grad_bary;
   std::vector<float> grad_attributes;
   ScreenGradient screen_grad;
-  std::vector<uint8_t> listed;  // per pixel, while collecting the uncovered active pixels
+  std::vector<uint8_t> listed;    // per pixel, while collecting the pixels blends change
+  std::vector<int32_t> blended;   // those pixels, each once
   std::vector<Vec3f> grad_positions;
 };
 

@@ -37,12 +37,8 @@ double masked_image_l2(NormalRenderer& renderer, const std::vector<const Image*>
             "reference image must match the view resolution and be RGBA");
   }
   size_t count = 0;
+  for (int i = 0; i < views; ++i) count += renderer.view(size_t(i)).opaque_pixels;
   const std::vector<int>& order = renderer.largest_first();
-#pragma omp parallel for schedule(dynamic, 1) reduction(+ : count)
-  for (int k = 0; k < views; ++k) {
-    const DifferentiableView& v = renderer.view(size_t(order[size_t(k)]));
-    for (int32_t p : v.active) count += v.image.data[size_t(p) * 4 + 3] > 0.5f;
-  }
   if (count == 0) return 0.0;
   const float scale = weight / float(count * channels);
   std::vector<double> view_total(size_t(views), 0.0);  // summed in view order: deterministic
@@ -51,7 +47,7 @@ double masked_image_l2(NormalRenderer& renderer, const std::vector<const Image*>
     const int i = order[size_t(k)];
     DifferentiableView& v = renderer.view(size_t(i));
     const Image& ref = *references[size_t(i)];
-    double& total = view_total[size_t(i)];
+    double total = 0.0;  // in a register: summing into view_total[i] made a store-load chain per pixel
     for (int32_t p : v.active) {
       const float* img = v.image.data.data() + size_t(p) * 4;
       if (img[3] <= 0.5f) continue;
@@ -66,6 +62,7 @@ double masked_image_l2(NormalRenderer& renderer, const std::vector<const Image*>
       }
       total += pixel_total;
     }
+    view_total[size_t(i)] = total;
   }
   return std::accumulate(view_total.begin(), view_total.end(), 0.0) * scale;
 }
@@ -84,9 +81,8 @@ double background_alpha_l2(NormalRenderer& renderer, const std::vector<NormalTar
     const int i = order[size_t(k)];
     DifferentiableView& v = renderer.view(size_t(i));
     const NormalTarget& t = targets[size_t(i)];
-    double& total = view_total[size_t(i)];
     // Off the rendered footprint the alpha is 0: those pixels add the constant target alpha^2.
-    total += t.background_alpha_sq;
+    double total = t.background_alpha_sq;
     for (int32_t p : v.active) {
       const float target_alpha = t.rgba.data[size_t(p) * 4 + 3];
       if (target_alpha >= 0.5f) continue;
@@ -94,6 +90,7 @@ double background_alpha_l2(NormalRenderer& renderer, const std::vector<NormalTar
       total += double(d) * d - double(target_alpha) * target_alpha;
       v.grad_image.data[size_t(p) * 4 + 3] += 2.f * scale * d;
     }
+    view_total[size_t(i)] = total;
   }
   return std::accumulate(view_total.begin(), view_total.end(), 0.0) * scale;
 }
