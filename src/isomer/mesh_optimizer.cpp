@@ -4,8 +4,19 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "isomer/remesh/spatial_order.h"
 
 namespace u3d {
+
+namespace {
+
+// Passes between renumberings in space-filling-curve order (remesh/spatial_order.h). On the bundled
+// example's refinement, every 10 passes took the rendering and back-propagation from 2.3-2.7 s and
+// 1.2-1.4 s to 1.9-2.1 s and 0.8-0.9 s; every pass cost more in sorting (0.4 s) than it won, every 30
+// won less.
+constexpr int kSpatialOrderInterval = 10;
+
+}  // namespace
 
 MeshOptimizer::MeshOptimizer(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& faces,
                              const MeshOptimizerOptions& options)
@@ -100,6 +111,10 @@ RemeshCounts MeshOptimizer::remesh(bool flip) {
   }
   const RemeshCounts c =
       remesh_pass(rows_, faces_, std::move(min_len), std::move(max_len), flip, rng_, options_.max_vertices, &topology_);
+  if (++remesh_passes_ % kSpatialOrderInterval == 0) {
+    reorder_spatially(rows_, faces_);
+    topology_.invalidate();
+  }
   refresh_positions();
   return c;
 }

@@ -65,6 +65,7 @@ class MeshOptimizer {
   std::mt19937 rng_;
   TopologyCache topology_;  // of faces_, kept between remeshing passes
   int step_ = 0;
+  int remesh_passes_ = 0;
 };
 
 }  // namespace u3d

@@ -22,7 +22,9 @@ TEST(MeshOptimizer, InflatesASphereAndShrinksEdgesOnceSettled) {
     for (size_t v = 0; v < p.size(); ++v) grad[v] = (p[v].norm() - 0.8f) * p[v].normalized();
     opt.step(grad);
     opt.remesh();
-    if (step % 25 == 24) ASSERT_EQ(closed_manifold_problem(opt.faces(), opt.positions().size()), "") << "step " << step;
+    if (step % 25 == 24) {
+      ASSERT_EQ(closed_manifold_problem(opt.faces(), opt.positions().size()), "") << "step " << step;
+    }
   }
   double radius = 0, worst = 0;
   for (const Vec3f& p : opt.positions()) radius += p.norm(), worst = std::max(worst, double(std::abs(p.norm() - 0.8f)));
