@@ -1,6 +1,7 @@
 #include "isomer/normal_renderer.h"
 
 #include <algorithm>
+#include <initializer_list>
 #include <numeric>
 
 #include "render/barycentric_backward.h"
@@ -12,14 +13,14 @@ namespace {
 
 constexpr int kChannels = 4;
 
-// Four explicit stores per pixel: with the channel count known the compiler writes them directly
-// instead of calling memset for every 16 bytes.
-void zero_pixels(Image& image, const std::vector<int32_t>& pixels) {
-  float* data = image.data.data();
-  for (int32_t p : pixels) {
-    float* px = data + size_t(p) * kChannels;
-    px[0] = px[1] = px[2] = px[3] = 0.f;
-  }
+// Four explicit stores per pixel and image: with the channel count known the compiler writes them
+// directly instead of calling memset for every 16 bytes; one pass over the pixel list for all images.
+void zero_pixels(std::initializer_list<Image*> images, const std::vector<int32_t>& pixels) {
+  for (int32_t p : pixels)
+    for (Image* image : images) {
+      float* px = image->data.data() + size_t(p) * kChannels;
+      px[0] = px[1] = px[2] = px[3] = 0.f;
+    }
 }
 
 }  // namespace
@@ -57,10 +58,9 @@ void NormalRenderer::render(const std::vector<Vec3f>& positions, const std::vect
 #pragma omp parallel for schedule(dynamic, 1) if (views_.size() > 1)
   for (size_t slot = 0; slot < views_.size(); ++slot) {
     DifferentiableView& v = views_[size_t(largest_first_[slot])];
-    // Forget the previous frame's footprint.
-    zero_pixels(v.color, v.active);
-    zero_pixels(v.image, v.active);
-    zero_pixels(v.grad_image, v.active);
+    // Forget the previous frame's footprint. The losses write grad_image on active pixels alone, so
+    // this also leaves it zero everywhere for the new frame.
+    zero_pixels({&v.color, &v.image, &v.grad_image}, v.active);
     rasterize_into(positions, faces, v.camera, v.raster, RasterOptions{.cull_backfaces = true});
     v.projection = project_to_screen(positions, v.camera);
     covered_pixels(v.raster, v.covered);
@@ -86,7 +86,6 @@ void NormalRenderer::render(const std::vector<Vec3f>& positions, const std::vect
       v.opaque_pixels += size_t(v.image.data[size_t(p) * kChannels + 3] > 0.5f);
       v.opaque_pixels -= size_t(v.raster.covered(p));
     }
-    zero_pixels(v.grad_image, v.active);
   }
   std::stable_sort(largest_first_.begin(), largest_first_.end(),
                    [&](int a, int b) { return views_[size_t(a)].active.size() > views_[size_t(b)].active.size(); });

@@ -56,8 +56,8 @@ class NormalRenderer {
   // (small, large, small, large) leaves one idle for a small view's time every pass.
   const std::vector<int>& largest_first() const { return largest_first_; }
 
-  // Renders all views of the mesh with these unit vertex normals; clears each view's grad_image on its
-  // new active pixels.
+  // Renders all views of the mesh with these unit vertex normals; clears each view's grad_image (zero
+  // everywhere afterwards, as long as only the active pixels were written since the last render).
   void render(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& faces,
               const std::vector<Vec3f>& vertex_normals);
 
