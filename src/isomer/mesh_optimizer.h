@@ -45,7 +45,8 @@ class MeshOptimizer {
 
   // One update from dL/d(positions) (sized like positions()).
   void step(const std::vector<Vec3f>& grad);
-  // Remeshes toward the current reference lengths.
+  // Remeshes toward the current reference lengths. Every 10th call also renumbers the vertices and
+  // faces in Z-order (remesh/spatial_order.h), so vertex and face indices never outlive a remesh().
   RemeshCounts remesh(bool flip = true);
 
   // Row layout, exposed for tests of the state transport.
@@ -65,7 +66,7 @@ class MeshOptimizer {
   std::mt19937 rng_;
   TopologyCache topology_;  // of faces_, kept between remeshing passes
   int step_ = 0;
-  int remesh_passes_ = 0;
+  int remesh_passes_ = 0;   // remesh() calls, for the periodic renumbering
 };
 
 }  // namespace u3d
