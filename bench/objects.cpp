@@ -90,7 +90,8 @@ std::string fmt(double v, const char* spec) {
   return buf;
 }
 
-const std::vector<std::string> kMetricKeys = {"cd", "iou", "fscore", "fscore_visible", "hidden", "psnr", "ssim", "seconds", "faces"};
+const std::vector<std::string> kMetricKeys = {"cd",   "iou",  "fscore",  "fscore_visible", "hidden",
+                                              "psnr", "ssim", "seconds", "faces"};
 
 std::string markdown(const json& rows, const json& means, const std::string& fscore_label) {
   std::string md = "| object | res | variant | CD-L1 | Vol. IoU | " + fscore_label + " | " + fscore_label +

@@ -28,10 +28,9 @@ SurfaceDistances surface_distances(const Mesh& pred, const Mesh& gt, size_t samp
   // Different seeds per side so two identical meshes are not trivially sampled at identical points.
   SurfaceSamples pred_samples = sample_surface(pred.positions, pred.faces, samples, seed);
   SurfaceSamples gt_samples = sample_surface(gt.positions, gt.faces, samples, seed + 1);
-  SurfaceDistances d{distances_to_surface(pred_samples.points, gt_bvh), distances_to_surface(gt_samples.points, pred_bvh),
-                     {}};
-  d.gt_samples = std::move(gt_samples);
-  return d;
+  // Braced initializers run in order: the GT samples are measured before they move into the result.
+  return {distances_to_surface(pred_samples.points, gt_bvh), distances_to_surface(gt_samples.points, pred_bvh),
+          std::move(gt_samples)};
 }
 
 SurfaceDistances keep_gt_samples(const SurfaceDistances& d, const std::vector<uint8_t>& keep) {

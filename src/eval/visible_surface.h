@@ -17,8 +17,8 @@ struct VisibilityOptions {
 };
 
 // Per sample (1 = visible): seen by at least one of the views, i.e. at its pixel nothing lies in front
-// of it by more than two pixel widths. Both sides of every
-// face are seen (GT models are often open or inconsistently oriented). Throws Error on an empty mesh.
+// of it by more than two pixel widths. Both sides of every face are seen (GT models are often open or
+// inconsistently oriented). Throws Error on an empty mesh.
 std::vector<uint8_t> visible_from_outside(const Mesh& mesh, const SurfaceSamples& samples,
                                           const VisibilityOptions& options = {});
 
