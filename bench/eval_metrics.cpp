@@ -2,12 +2,12 @@
 // sampling, hierarchy build, 2 x 100k closest-point queries, occupancy grids by winding numbers.
 #include <benchmark/benchmark.h>
 
-#include "../tests/eval/test_shapes.h"
+#include "../tests/geometry/test_shapes.h"
 #include "core/parallel.h"
 #include "eval/chamfer.h"
-#include "eval/surface_sampling.h"
-#include "eval/triangle_bvh.h"
 #include "eval/volume_iou.h"
+#include "geometry/surface_sampling.h"
+#include "geometry/triangle_bvh.h"
 
 using namespace u3d;
 

@@ -6,8 +6,8 @@
 #include <cmath>
 
 #include "core/progress.h"
+#include "geometry/icosphere.h"
 #include "isomer/coarse_stage.h"
-#include "isomer/icosphere.h"
 #include "isomer/mesh_optimizer.h"
 #include "isomer/normal_renderer.h"
 #include "isomer/reconstruction_losses.h"

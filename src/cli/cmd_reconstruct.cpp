@@ -7,11 +7,11 @@
 #include "cli/command.h"
 #include "core/error.h"
 #include "core/progress.h"
+#include "geometry/mesh_topology.h"
 #include "io/mesh_io.h"
-#include "isomer/mesh_topology.h"
-#include "isomer/preview.h"
 #include "isomer/reconstruct.h"
 #include "isomer/silhouette_check.h"
+#include "render/preview.h"
 
 namespace u3d::cli {
 namespace {

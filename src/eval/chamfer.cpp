@@ -1,8 +1,8 @@
 #include "eval/chamfer.h"
 
 #include "core/error.h"
-#include "eval/surface_sampling.h"
-#include "eval/triangle_bvh.h"
+#include "geometry/surface_sampling.h"
+#include "geometry/triangle_bvh.h"
 
 namespace u3d {
 

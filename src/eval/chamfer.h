@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "core/mesh.h"
-#include "eval/surface_sampling.h"
+#include "geometry/surface_sampling.h"
 
 namespace u3d {
 

@@ -3,9 +3,9 @@
 #include <cmath>
 
 #include "core/error.h"
-#include "eval/triangle_bvh.h"
-#include "eval/triangle_split.h"
-#include "eval/winding_number.h"
+#include "geometry/triangle_bvh.h"
+#include "geometry/triangle_split.h"
+#include "geometry/winding_number.h"
 
 namespace u3d {
 

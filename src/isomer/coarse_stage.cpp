@@ -1,7 +1,7 @@
 #include "isomer/coarse_stage.h"
 
 #include "core/progress.h"
-#include "isomer/icosphere.h"
+#include "geometry/icosphere.h"
 #include "isomer/mesh_optimizer.h"
 #include "isomer/optimisation_loop.h"
 #include "isomer/reconstruction_losses.h"

@@ -9,8 +9,8 @@
 
 #include "core/error.h"
 #include "core/progress.h"
-#include "isomer/mesh_repair.h"
-#include "isomer/open3d_bridge.h"
+#include "geometry/mesh_repair.h"
+#include "geometry/open3d_bridge.h"
 
 namespace u3d {
 namespace {

@@ -5,10 +5,10 @@
 #include <Eigen/Geometry>
 
 #include "core/error.h"
-#include "isomer/disjoint_sets.h"
-#include "isomer/loop_subdivision.h"
-#include "isomer/mesh_repair.h"
-#include "isomer/mesh_topology.h"
+#include "geometry/disjoint_sets.h"
+#include "geometry/loop_subdivision.h"
+#include "geometry/mesh_repair.h"
+#include "geometry/mesh_topology.h"
 
 namespace u3d {
 

@@ -6,7 +6,7 @@
 
 #include "core/error.h"
 #include "core/progress.h"
-#include "isomer/quadric_decimation.h"
+#include "geometry/quadric_decimation.h"
 
 namespace u3d {
 namespace {

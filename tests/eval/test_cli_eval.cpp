@@ -7,8 +7,8 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "geometry/test_shapes.h"
 #include "io/mesh_io.h"
-#include "test_shapes.h"
 
 using namespace u3d;
 namespace fs = std::filesystem;

@@ -5,7 +5,7 @@
 #include "core/progress.h"
 #include "eval/eval_report.h"
 #include "eval/evaluate.h"
-#include "test_shapes.h"
+#include "geometry/test_shapes.h"
 
 using namespace u3d;
 

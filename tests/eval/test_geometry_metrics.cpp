@@ -8,7 +8,7 @@
 #include "eval/fscore.h"
 #include "eval/mesh_checks.h"
 #include "eval/volume_iou.h"
-#include "test_shapes.h"
+#include "geometry/test_shapes.h"
 
 using namespace u3d;
 

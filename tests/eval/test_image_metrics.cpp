@@ -6,7 +6,7 @@
 #include "core/error.h"
 #include "eval/appearance.h"
 #include "eval/image_metrics.h"
-#include "test_shapes.h"
+#include "geometry/test_shapes.h"
 
 using namespace u3d;
 

@@ -7,7 +7,7 @@
 #include "core/progress.h"
 #include "eval/evaluate.h"
 #include "eval/visible_surface.h"
-#include "test_shapes.h"
+#include "geometry/test_shapes.h"
 
 using namespace u3d;
 

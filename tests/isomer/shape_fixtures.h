@@ -8,7 +8,7 @@
 
 #include "core/camera.h"
 #include "core/image.h"
-#include "isomer/icosphere.h"
+#include "geometry/icosphere.h"
 #include "isomer/normal_renderer.h"
 
 namespace u3d::test {

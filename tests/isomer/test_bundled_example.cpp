@@ -8,7 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "core/progress.h"
-#include "isomer/mesh_topology.h"
+#include "geometry/mesh_topology.h"
 #include "isomer/reconstruct.h"
 #include "isomer/silhouette_check.h"
 

@@ -8,8 +8,8 @@
 #include <regex>
 #include <sstream>
 
+#include "geometry/mesh_topology.h"
 #include "io/mesh_io.h"
-#include "isomer/mesh_topology.h"
 #include "synthetic_views.h"
 
 namespace u3d {

@@ -2,8 +2,8 @@
 #include <gtest/gtest.h>
 
 #include "core/progress.h"
+#include "geometry/manifold_check.h"
 #include "isomer/coarse_stage.h"
-#include "isomer/remesh/manifold_check.h"
 #include "shape_fixtures.h"
 
 using namespace u3d;

@@ -3,9 +3,9 @@
 
 #include <random>
 
+#include "geometry/manifold_check.h"
+#include "geometry/mesh_topology.h"
 #include "isomer/initial_mesh.h"
-#include "isomer/mesh_topology.h"
-#include "isomer/remesh/manifold_check.h"
 #include "isomer/view_set.h"
 #include "synthetic_views.h"
 

@@ -7,8 +7,8 @@
 #include <algorithm>
 #include <random>
 
+#include "geometry/icosphere.h"
 #include "gradient_check.h"
-#include "isomer/icosphere.h"
 #include "isomer/normal_renderer.h"
 #include "isomer/reconstruction_losses.h"
 #include "shape_fixtures.h"

@@ -1,9 +1,9 @@
 // The continuous-remeshing optimizer minimises a simple geometric energy while remeshing every step.
 #include <gtest/gtest.h>
 
-#include "isomer/icosphere.h"
+#include "geometry/icosphere.h"
+#include "geometry/manifold_check.h"
 #include "isomer/mesh_optimizer.h"
-#include "isomer/remesh/manifold_check.h"
 
 using namespace u3d;
 

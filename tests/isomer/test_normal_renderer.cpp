@@ -2,7 +2,7 @@
 // It also counts each frame's opaque pixels for the losses.
 #include <gtest/gtest.h>
 
-#include "isomer/icosphere.h"
+#include "geometry/icosphere.h"
 #include "isomer/normal_renderer.h"
 
 namespace u3d {

@@ -5,8 +5,8 @@
 #include <cmath>
 
 #include "core/progress.h"
+#include "geometry/manifold_check.h"
 #include "isomer/refine_stage.h"
-#include "isomer/remesh/manifold_check.h"
 #include "shape_fixtures.h"
 
 using namespace u3d;

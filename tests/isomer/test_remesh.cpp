@@ -8,11 +8,11 @@
 #include <random>
 #include <string>
 
-#include "isomer/icosphere.h"
+#include "geometry/edge_topology.h"
+#include "geometry/icosphere.h"
+#include "geometry/manifold_check.h"
 #include "isomer/remesh/collapse.h"
-#include "isomer/remesh/edge_topology.h"
 #include "isomer/remesh/flip.h"
-#include "isomer/remesh/manifold_check.h"
 #include "isomer/remesh/remesh.h"
 #include "isomer/remesh/split.h"
 

@@ -7,8 +7,8 @@
 #include <random>
 
 #include "core/error.h"
+#include "geometry/icosphere.h"
 #include "gradient_check.h"
-#include "isomer/icosphere.h"
 #include "isomer/normal_renderer.h"
 #include "isomer/reconstruction_losses.h"
 #include "render/barycentric_backward.h"

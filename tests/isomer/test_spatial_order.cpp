@@ -9,7 +9,7 @@
 #include <set>
 #include <tuple>
 
-#include "isomer/icosphere.h"
+#include "geometry/icosphere.h"
 #include "isomer/remesh/spatial_order.h"
 
 using namespace u3d;

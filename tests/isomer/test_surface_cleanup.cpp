@@ -2,8 +2,8 @@
 // optimisation left crumbs beside the surface (a 2-face "pillow" breaks Open3D's Loop subdivision).
 #include <gtest/gtest.h>
 
-#include "isomer/icosphere.h"
-#include "isomer/mesh_topology.h"
+#include "geometry/icosphere.h"
+#include "geometry/mesh_topology.h"
 #include "isomer/surface_cleanup.h"
 
 namespace u3d {

@@ -6,8 +6,8 @@
 #include <map>
 
 #include "core/error.h"
-#include "isomer/remesh/manifold_check.h"
-#include "isomer/mesh_topology.h"
+#include "geometry/manifold_check.h"
+#include "geometry/mesh_topology.h"
 #include "isomer/visual_hull.h"
 #include "synthetic_views.h"
 

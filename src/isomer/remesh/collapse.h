@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "core/mesh.h"
-#include "isomer/remesh/edge_topology.h"
+#include "geometry/edge_topology.h"
 #include "isomer/remesh/vertex_rows.h"
 
 namespace u3d {

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <array>
 
-#include "isomer/remesh/edge_topology.h"
+#include "geometry/edge_topology.h"
 
 namespace u3d {
 

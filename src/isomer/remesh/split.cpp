@@ -1,6 +1,6 @@
 #include "isomer/remesh/split.h"
 
-#include "isomer/remesh/edge_topology.h"
+#include "geometry/edge_topology.h"
 
 namespace u3d {
 

@@ -1,4 +1,4 @@
-#include "eval/surface_sampling.h"
+#include "geometry/surface_sampling.h"
 
 #include <Eigen/Geometry>
 

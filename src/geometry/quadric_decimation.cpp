@@ -1,4 +1,4 @@
-#include "isomer/quadric_decimation.h"
+#include "geometry/quadric_decimation.h"
 
 #include <Eigen/Dense>
 #include <algorithm>

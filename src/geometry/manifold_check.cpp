@@ -1,4 +1,4 @@
-#include "isomer/remesh/manifold_check.h"
+#include "geometry/manifold_check.h"
 
 #include <map>
 #include <utility>

@@ -7,10 +7,10 @@
 #include <array>
 #include <map>
 
-#include "isomer/remesh/manifold_check.h"
-#include "isomer/icosphere.h"
-#include "isomer/mesh_topology.h"
-#include "isomer/quadric_decimation.h"
+#include "geometry/icosphere.h"
+#include "geometry/manifold_check.h"
+#include "geometry/mesh_topology.h"
+#include "geometry/quadric_decimation.h"
 
 namespace u3d {
 namespace {

@@ -4,11 +4,11 @@
 #include <random>
 
 #include "core/error.h"
-#include "eval/surface_sampling.h"
-#include "eval/triangle_bvh.h"
-#include "eval/triangle_split.h"
-#include "eval/winding_number.h"
-#include "test_shapes.h"
+#include "geometry/surface_sampling.h"
+#include "geometry/test_shapes.h"
+#include "geometry/triangle_bvh.h"
+#include "geometry/triangle_split.h"
+#include "geometry/winding_number.h"
 
 using namespace u3d;
 

@@ -1,5 +1,5 @@
 #pragma once
-// Conversions between u3d::Mesh and Open3D's TriangleMesh, for the isomer stages that use Open3D's
+// Conversions between u3d::Mesh and Open3D's TriangleMesh, for the stages that use Open3D's
 // geometry processing (Poisson, decimation, smoothing, subdivision). Only geometry and vertex
 // colours travel; the Open3D headers stay out of this header (they are slow to compile).
 #include <memory>

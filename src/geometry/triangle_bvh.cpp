@@ -1,4 +1,4 @@
-#include "eval/triangle_bvh.h"
+#include "geometry/triangle_bvh.h"
 
 #include <algorithm>
 #include <cmath>

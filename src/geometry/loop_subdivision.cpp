@@ -1,6 +1,6 @@
-#include "isomer/loop_subdivision.h"
+#include "geometry/loop_subdivision.h"
 
-#include "isomer/remesh/edge_topology.h"
+#include "geometry/edge_topology.h"
 
 namespace u3d {
 

@@ -1,4 +1,4 @@
-#include "isomer/preview.h"
+#include "render/preview.h"
 
 #include <algorithm>
 

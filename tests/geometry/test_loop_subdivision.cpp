@@ -6,10 +6,10 @@
 
 #include <algorithm>
 
-#include "isomer/icosphere.h"
-#include "isomer/loop_subdivision.h"
-#include "isomer/mesh_topology.h"
-#include "isomer/open3d_bridge.h"
+#include "geometry/icosphere.h"
+#include "geometry/loop_subdivision.h"
+#include "geometry/mesh_topology.h"
+#include "geometry/open3d_bridge.h"
 
 namespace u3d {
 namespace {

@@ -1,4 +1,4 @@
-#include "isomer/icosphere.h"
+#include "geometry/icosphere.h"
 
 #include <cmath>
 #include <map>

@@ -1,4 +1,4 @@
-#include "isomer/marching_tetrahedra.h"
+#include "geometry/marching_tetrahedra.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>

@@ -1,9 +1,9 @@
-#include "isomer/mesh_topology.h"
+#include "geometry/mesh_topology.h"
 
 #include <gtest/gtest.h>
 
 #include "core/error.h"
-#include "isomer/icosphere.h"
+#include "geometry/icosphere.h"
 
 namespace {
 

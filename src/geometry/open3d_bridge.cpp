@@ -1,4 +1,4 @@
-#include "isomer/open3d_bridge.h"
+#include "geometry/open3d_bridge.h"
 
 #include <open3d/geometry/TriangleMesh.h>
 

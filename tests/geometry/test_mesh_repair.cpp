@@ -1,8 +1,8 @@
 // Repair closes holes and removes pinches, leaving a closed manifold with outward faces.
 #include <gtest/gtest.h>
 
-#include "isomer/mesh_repair.h"
-#include "isomer/mesh_topology.h"
+#include "geometry/mesh_repair.h"
+#include "geometry/mesh_topology.h"
 
 namespace u3d {
 namespace {

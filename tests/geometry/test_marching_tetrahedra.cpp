@@ -6,9 +6,9 @@
 #include <map>
 
 #include "core/error.h"
-#include "isomer/remesh/manifold_check.h"
-#include "isomer/marching_tetrahedra.h"
-#include "isomer/mesh_topology.h"
+#include "geometry/manifold_check.h"
+#include "geometry/marching_tetrahedra.h"
+#include "geometry/mesh_topology.h"
 
 namespace u3d {
 namespace {

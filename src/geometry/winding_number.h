@@ -10,7 +10,7 @@
 // it is of the same size as the neglected second-order term.)
 #include <vector>
 
-#include "eval/triangle_bvh.h"
+#include "geometry/triangle_bvh.h"
 
 namespace u3d {
 

@@ -1,4 +1,4 @@
-#include "isomer/remesh/edge_topology.h"
+#include "geometry/edge_topology.h"
 
 #include <algorithm>
 

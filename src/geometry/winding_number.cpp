@@ -1,4 +1,4 @@
-#include "eval/winding_number.h"
+#include "geometry/winding_number.h"
 
 #include <cmath>
 #include <numbers>

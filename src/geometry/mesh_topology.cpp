@@ -1,12 +1,12 @@
-#include "isomer/mesh_topology.h"
+#include "geometry/mesh_topology.h"
 
 #include <Eigen/Geometry>
 
 #include <cstdio>
 
 #include "core/error.h"
-#include "isomer/disjoint_sets.h"
-#include "isomer/remesh/edge_topology.h"
+#include "geometry/disjoint_sets.h"
+#include "geometry/edge_topology.h"
 
 namespace u3d {
 

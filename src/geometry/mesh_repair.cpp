@@ -1,4 +1,4 @@
-#include "isomer/mesh_repair.h"
+#include "geometry/mesh_repair.h"
 
 #include <open3d/geometry/TriangleMesh.h>
 
@@ -8,8 +8,8 @@
 #include <set>
 #include <tuple>
 
-#include "isomer/mesh_topology.h"
-#include "isomer/open3d_bridge.h"
+#include "geometry/mesh_topology.h"
+#include "geometry/open3d_bridge.h"
 
 namespace u3d {
 namespace {

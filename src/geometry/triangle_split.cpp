@@ -1,4 +1,4 @@
-#include "eval/triangle_split.h"
+#include "geometry/triangle_split.h"
 
 #include <algorithm>
 #include <array>
