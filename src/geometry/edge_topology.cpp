@@ -65,4 +65,17 @@ void rebuild_rings(EdgeTopology& t, size_t vertex_count) {
   for (const auto& ev : t.edge_vertices) t.ring[fill[ev[0]]++] = ev[1], t.ring[fill[ev[1]]++] = ev[0];
 }
 
+EdgeSideLists edge_side_lists(const EdgeTopology& t) {
+  EdgeSideLists l;
+  l.offsets.assign(t.edge_count() + 1, 0);
+  for (const Vec3i& fe : t.face_edges)
+    for (int i = 0; i < 3; ++i) ++l.offsets[fe[i] + 1];
+  for (size_t e = 0; e < t.edge_count(); ++e) l.offsets[e + 1] += l.offsets[e];
+  l.sides.resize(t.face_edges.size() * 3);
+  std::vector<int> fill(l.offsets.begin(), l.offsets.end() - 1);
+  for (size_t f = 0; f < t.face_edges.size(); ++f)
+    for (int i = 0; i < 3; ++i) l.sides[fill[t.face_edges[f][i]]++] = int(f * 3 + i);
+  return l;
+}
+
 }  // namespace u3d

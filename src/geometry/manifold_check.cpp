@@ -1,40 +1,28 @@
 #include "geometry/manifold_check.h"
 
-#include <map>
-#include <utility>
+#include "geometry/edge_topology.h"
+#include "geometry/mesh_topology.h"
 
 namespace u3d {
 
 std::string closed_manifold_problem(const std::vector<Vec3i>& faces, size_t vertex_count) {
-  std::map<std::pair<int, int>, int> directed;  // directed edge -> count
-  std::vector<std::vector<std::pair<int, int>>> fan(vertex_count);  // per vertex: (next, prev) of each face
-  for (size_t f = 0; f < faces.size(); ++f) {
-    const Vec3i& c = faces[f];
+  for (size_t f = 0; f < faces.size(); ++f)
     for (int i = 0; i < 3; ++i) {
-      if (c[i] < 0 || size_t(c[i]) >= vertex_count) return "face " + std::to_string(f) + " has a bad index";
-      if (c[i] == c[(i + 1) % 3]) return "face " + std::to_string(f) + " is degenerate";
-      if (++directed[{c[i], c[(i + 1) % 3]}] > 1)
-        return "edge " + std::to_string(c[i]) + "->" + std::to_string(c[(i + 1) % 3]) + " is used twice";
-      fan[c[i]].push_back({c[(i + 1) % 3], c[(i + 2) % 3]});
+      if (faces[f][i] < 0 || size_t(faces[f][i]) >= vertex_count) return "face " + std::to_string(f) + " has a bad index";
+      if (faces[f][i] == faces[f][(i + 1) % 3]) return "face " + std::to_string(f) + " is degenerate";
     }
+  const EdgeTopology topo = build_edge_topology(faces, vertex_count);
+  for (size_t e = 0; e < topo.edge_count(); ++e) {
+    const std::string edge = std::to_string(topo.edge_vertices[e][0]) + "-" + std::to_string(topo.edge_vertices[e][1]);
+    // More than two sides, or two the same way, leave two sides in one direction.
+    if (!topo.edge_manifold[e]) return "edge " + edge + " is used twice in one direction";
+    if (topo.border(int(e))) return "edge " + edge + " is a border";
   }
-  for (const auto& [edge, count] : directed)
-    if (!directed.count({edge.second, edge.first}))
-      return "edge " + std::to_string(edge.first) + "-" + std::to_string(edge.second) + " is a border";
+  // With every edge closed and manifold, a vertex's fans are closed too: only their number is left.
+  const std::vector<int> fans = vertex_fan_counts(faces, topo, vertex_count);
   for (size_t v = 0; v < vertex_count; ++v) {
-    if (fan[v].empty()) return "vertex " + std::to_string(v) + " is unreferenced";
-    // Walk the fan: each face's `next` vertex is the `prev` vertex of the following face.
-    std::map<int, int> by_prev;
-    for (const auto& [next, prev] : fan[v]) by_prev[prev] = next;
-    size_t steps = 0;
-    int cursor = fan[v][0].first;
-    do {
-      auto it = by_prev.find(cursor);
-      if (it == by_prev.end()) return "vertex " + std::to_string(v) + " has an open fan";
-      cursor = it->second;
-      ++steps;
-    } while (cursor != fan[v][0].first && steps <= fan[v].size());
-    if (steps != fan[v].size()) return "vertex " + std::to_string(v) + " is pinched (several fans)";
+    if (fans[v] == 0) return "vertex " + std::to_string(v) + " is unreferenced";
+    if (fans[v] > 1) return "vertex " + std::to_string(v) + " is pinched (several fans)";
   }
   return {};
 }

@@ -2,11 +2,11 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cstdio>
 
 #include "core/error.h"
 #include "geometry/disjoint_sets.h"
-#include "geometry/edge_topology.h"
 
 namespace u3d {
 
@@ -16,6 +16,23 @@ std::string MeshTopology::summary() const {
                 watertight ? "closed" : "open", edge_manifold && vertex_manifold ? "manifold" : "non-manifold",
                 components, euler_characteristic, volume);
   return buf;
+}
+
+std::vector<int> vertex_fan_counts(const std::vector<Vec3i>& faces, const EdgeTopology& topology,
+                                   size_t vertex_count) {
+  // Corners (face * 3 + i) around the same vertex are joined across every edge two faces share; each
+  // fan ends up as one set, whose root is one of its corners.
+  DisjointSets corners(faces.size() * 3);
+  for (const auto& [left, right] : topology.edge_sides) {
+    if (left < 0 || right < 0) continue;
+    // `left` runs lower -> higher vertex from its corner, `right` runs higher -> lower from its own.
+    const int fl = left / 3, il = left % 3, fr = right / 3, ir = right % 3;
+    corners.unite(fl * 3 + il, fr * 3 + (ir + 1) % 3);  // the lower vertex
+    corners.unite(fl * 3 + (il + 1) % 3, fr * 3 + ir);  // the higher vertex
+  }
+  std::vector<int> fans(vertex_count, 0);
+  for (size_t c = 0; c < faces.size() * 3; ++c) fans[faces[c / 3][c % 3]] += corners.find(int(c)) == int(c);
+  return fans;
 }
 
 // Built on the remesher's edge topology rather than Open3D's checks: those build a hash map of edges
@@ -28,29 +45,15 @@ MeshTopology mesh_topology(const Mesh& mesh) {
     require((f.array() >= 0).all() && (f.array() < vertex_count).all(), "mesh topology: a face references a missing vertex");
   const EdgeTopology topo = build_edge_topology(faces, mesh.vertex_count());
   t.edge_manifold = t.watertight = true;
-  // Corners (face * 3 + i) around the same vertex are joined across every edge two faces share; a
-  // vertex is manifold when all of its corners end up in one fan. Faces are joined the same way.
-  DisjointSets corners(faces.size() * 3), pieces(faces.size());
+  DisjointSets pieces(faces.size());  // faces joined across every edge two of them share
   for (size_t e = 0; e < topo.edge_count(); ++e) {
     const auto [left, right] = topo.edge_sides[e];
     t.edge_manifold = t.edge_manifold && topo.edge_manifold[e];
     t.watertight = t.watertight && topo.edge_manifold[e] && left >= 0 && right >= 0;
-    if (left < 0 || right < 0) continue;
-    // `left` runs lower -> higher vertex from its corner, `right` runs higher -> lower from its own.
-    const int fl = left / 3, il = left % 3, fr = right / 3, ir = right % 3;
-    corners.unite(fl * 3 + il, fr * 3 + (ir + 1) % 3);  // the lower vertex
-    corners.unite(fl * 3 + (il + 1) % 3, fr * 3 + ir);  // the higher vertex
-    pieces.unite(fl, fr);
+    if (left >= 0 && right >= 0) pieces.unite(left / 3, right / 3);
   }
-  std::vector<int> fan_of_vertex(mesh.vertex_count(), -1);
-  t.vertex_manifold = true;
-  for (size_t f = 0; f < faces.size(); ++f)
-    for (int i = 0; i < 3; ++i) {
-      int& fan = fan_of_vertex[faces[f][i]];
-      const int root = corners.find(int(f * 3 + i));
-      if (fan < 0) fan = root;
-      t.vertex_manifold = t.vertex_manifold && fan == root;
-    }
+  const std::vector<int> fans = vertex_fan_counts(faces, topo, mesh.vertex_count());
+  t.vertex_manifold = std::all_of(fans.begin(), fans.end(), [](int n) { return n <= 1; });
   for (size_t f = 0; f < faces.size(); ++f) t.components += pieces.find(int(f)) == int(f);
   t.euler_characteristic = int(mesh.vertex_count()) - int(topo.edge_count()) + int(faces.size());
   // Divergence theorem; valid for any closed surface, meaningful as an orientation check.

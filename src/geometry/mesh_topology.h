@@ -1,8 +1,10 @@
 #pragma once
 // Topology checks of a reconstructed surface: ISOMER promises a closed, manifold mesh.
 #include <string>
+#include <vector>
 
 #include "core/mesh.h"
+#include "geometry/edge_topology.h"
 
 namespace u3d {
 
@@ -19,5 +21,10 @@ struct MeshTopology {
 };
 
 MeshTopology mesh_topology(const Mesh& mesh);
+
+// Per vertex, how many fans its faces form (0 when no face uses it): two faces at a vertex are in one
+// fan when a chain of faces joins them, each traversing an edge at the vertex opposite to the next.
+std::vector<int> vertex_fan_counts(const std::vector<Vec3i>& faces, const EdgeTopology& topology,
+                                   size_t vertex_count);
 
 }  // namespace u3d
