@@ -6,8 +6,9 @@
 #include <algorithm>
 #include <map>
 #include <set>
-#include <tuple>
 
+#include "geometry/disjoint_sets.h"
+#include "geometry/edge_topology.h"
 #include "geometry/mesh_topology.h"
 #include "geometry/open3d_bridge.h"
 
@@ -19,15 +20,13 @@ namespace {
 // holes into simple loops; returns false then. Otherwise every simple boundary loop is closed by a
 // fan around its centroid and the function returns true.
 bool fill_boundary_loops(Mesh& mesh, size_t& faces_removed, size_t& holes_filled) {
-  std::map<std::pair<int, int>, int> uses;  // undirected edge -> face count
-  for (const Vec3i& f : mesh.faces)
-    for (int k = 0; k < 3; ++k) ++uses[std::minmax(f[k], f[(k + 1) % 3])];
+  const EdgeTopology topo = build_edge_topology(mesh.faces, mesh.vertex_count());
   std::map<int, int> next;
   std::set<int> pinched;
-  for (const Vec3i& f : mesh.faces)
+  for (size_t f = 0; f < mesh.faces.size(); ++f)
     for (int k = 0; k < 3; ++k)
-      if (uses[std::minmax(f[k], f[(k + 1) % 3])] == 1 && !next.emplace(f[k], f[(k + 1) % 3]).second)
-        pinched.insert(f[k]);
+      if (topo.border(topo.face_edges[f][k]) && !next.emplace(mesh.faces[f][k], mesh.faces[f][(k + 1) % 3]).second)
+        pinched.insert(mesh.faces[f][k]);
   if (!pinched.empty()) {
     const size_t before = mesh.faces.size();
     std::erase_if(mesh.faces, [&](const Vec3i& f) { return pinched.count(f[0]) || pinched.count(f[1]) || pinched.count(f[2]); });
@@ -61,32 +60,15 @@ bool fill_boundary_loops(Mesh& mesh, size_t& faces_removed, size_t& holes_filled
 // this states the guarantee for the final faces, which the back-face-culling renderer relies on (a
 // flipped face would vanish from its views). Edges with more than two faces do not link their faces.
 void orient_consistently(Mesh& mesh) {
-  struct Side {
-    int lo, hi, face;
-    bool forward;  // the face runs lo -> hi
-  };
-  std::vector<Side> sides;
-  sides.reserve(mesh.faces.size() * 3);
-  for (size_t f = 0; f < mesh.faces.size(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      const int a = mesh.faces[f][k], b = mesh.faces[f][(k + 1) % 3];
-      sides.push_back({std::min(a, b), std::max(a, b), int(f), a < b});
-    }
-  std::sort(sides.begin(), sides.end(), [](const Side& x, const Side& y) {
-    return std::tie(x.lo, x.hi, x.face) < std::tie(y.lo, y.hi, y.face);
-  });
-  // Per face, its neighbours and whether the two agree as stored (opposite traversal).
+  const EdgeSideLists edges = edge_side_lists(build_edge_topology(mesh.faces, mesh.vertex_count()));
+  // Per face, its neighbours (by edge number) and whether the two agree as stored (opposite traversal).
   std::vector<std::vector<std::pair<int, bool>>> links(mesh.faces.size());
-  for (size_t i = 0; i < sides.size();) {
-    size_t j = i;
-    while (j < sides.size() && sides[j].lo == sides[i].lo && sides[j].hi == sides[i].hi) ++j;
-    if (j - i == 2) {
-      const Side &x = sides[i], &y = sides[i + 1];
-      const bool agree = x.forward != y.forward;
-      links[x.face].push_back({y.face, agree});
-      links[y.face].push_back({x.face, agree});
-    }
-    i = j;
+  for (size_t e = 0; e < edges.edge_count(); ++e) {
+    if (edges.count(int(e)) != 2) continue;
+    const int x = edges.sides[edges.offsets[e]], y = edges.sides[edges.offsets[e] + 1];
+    const bool agree = mesh.faces[x / 3][x % 3] != mesh.faces[y / 3][y % 3];  // they start at different ends
+    links[x / 3].push_back({y / 3, agree});
+    links[y / 3].push_back({x / 3, agree});
   }
   std::vector<int8_t> flip(mesh.faces.size(), -1);  // -1 unvisited, else 0/1
   std::vector<int> queue;
@@ -109,18 +91,20 @@ void orient_consistently(Mesh& mesh) {
 }
 
 // OrientTriangles makes each piece consistent but may turn a piece inside out: flip every piece whose
-// enclosed volume is negative.
+// enclosed volume is negative. Pieces are faces joined across every edge, non-manifold ones included.
 void orient_outward(Mesh& mesh) {
-  auto o3d = to_open3d(mesh);
-  const std::vector<int> piece = std::get<0>(o3d->ClusterConnectedTriangles());
+  const EdgeSideLists edges = edge_side_lists(build_edge_topology(mesh.faces, mesh.vertex_count()));
+  DisjointSets pieces(mesh.faces.size());
+  for (size_t e = 0; e < edges.edge_count(); ++e)
+    for (int k = edges.offsets[e] + 1; k < edges.offsets[e + 1]; ++k) pieces.unite(edges.sides[k] / 3, edges.sides[k - 1] / 3);
   std::map<int, double> volume;
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
     const Vec3i& t = mesh.faces[f];
-    volume[piece[f]] += mesh.positions[t[0]].cast<double>().dot(
+    volume[pieces.find(int(f))] += mesh.positions[t[0]].cast<double>().dot(
         mesh.positions[t[1]].cast<double>().cross(mesh.positions[t[2]].cast<double>()));
   }
   for (size_t f = 0; f < mesh.faces.size(); ++f)
-    if (volume[piece[f]] < 0) std::swap(mesh.faces[f][1], mesh.faces[f][2]);
+    if (volume[pieces.find(int(f))] < 0) std::swap(mesh.faces[f][1], mesh.faces[f][2]);
 }
 
 }  // namespace
