@@ -2,9 +2,10 @@
 
 #include <Eigen/Geometry>
 
-#include <algorithm>
 #include <functional>
 #include <unordered_map>
+
+#include "geometry/edge_topology.h"
 
 namespace u3d {
 
@@ -31,8 +32,8 @@ std::vector<uint32_t> weld_by_position(const std::vector<Vec3f>& positions) {
 MeshDiagnostics diagnose_mesh(const Mesh& mesh) {
   MeshDiagnostics d;
   const std::vector<uint32_t> id = weld_by_position(mesh.positions);
-  std::unordered_map<uint64_t, int> edge_use;
-  edge_use.reserve(mesh.faces.size() * 3);
+  std::vector<Vec3i> welded;  // the faces that are not degenerate, on the welded vertices
+  welded.reserve(mesh.faces.size());
   for (const auto& f : mesh.faces) {
     const Vec3f& a = mesh.positions[f[0]];
     if (id[f[0]] == id[f[1]] || id[f[1]] == id[f[2]] || id[f[2]] == id[f[0]] ||
@@ -40,13 +41,11 @@ MeshDiagnostics diagnose_mesh(const Mesh& mesh) {
       ++d.degenerate_faces;
       continue;
     }
-    for (int k = 0; k < 3; ++k) {
-      uint64_t a = id[f[k]], b = id[f[(k + 1) % 3]];
-      uint64_t lo = std::min(a, b), hi = std::max(a, b);
-      ++edge_use[(hi << 32) | lo];
-    }
+    welded.push_back(Vec3i(int(id[f[0]]), int(id[f[1]]), int(id[f[2]])));
   }
-  for (const auto& [edge, uses] : edge_use) {
+  const EdgeSideLists edges = edge_side_lists(build_edge_topology(welded, mesh.vertex_count()));
+  for (size_t e = 0; e < edges.edge_count(); ++e) {
+    const int uses = edges.count(int(e));
     if (uses == 1) ++d.boundary_edges;
     if (uses >= 3) ++d.nonmanifold_edges;
   }

@@ -119,3 +119,21 @@ TEST(MeshChecks, FindsHolesNonManifoldEdgesAndDegenerateFaces) {
       if (f[k] == 0 && &f - split.faces.data() < 4) f[k] = 8;
   EXPECT_TRUE(diagnose_mesh(split).closed());
 }
+
+TEST(MeshChecks, CountsEdgesByHowManyFacesUseThem) {
+  Mesh fin;  // a closed tetrahedron with a fin on its edge 1-2: three faces there, two border edges
+  fin.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}};
+  fin.faces = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}, {1, 2, 4}};
+  MeshDiagnostics d = diagnose_mesh(fin);
+  EXPECT_EQ(d.nonmanifold_edges, 1u);
+  EXPECT_EQ(d.boundary_edges, 2u);
+  EXPECT_EQ(mesh_warnings(d, "pred").size(), 2u);
+
+  // Two faces running the same way along 0-1: that edge is neither a border nor non-manifold.
+  Mesh same_way;
+  same_way.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  same_way.faces = {{0, 1, 2}, {0, 1, 3}};
+  d = diagnose_mesh(same_way);
+  EXPECT_EQ(d.boundary_edges, 4u);
+  EXPECT_EQ(d.nonmanifold_edges, 0u);
+}
