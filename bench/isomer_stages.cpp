@@ -34,7 +34,8 @@ std::vector<Camera> cameras(int res) {
 
 std::vector<Image> normal_maps(const Mesh& mesh, const std::vector<Camera>& cams) {
   NormalRenderer r(cams);
-  r.render(mesh.positions, mesh.faces, compute_vertex_normals(mesh.positions, mesh.faces).unit);
+  r.render(mesh.positions, mesh.faces, build_edge_topology(mesh.faces, mesh.positions.size()),
+           compute_vertex_normals(mesh.positions, mesh.faces).unit);
   std::vector<Image> maps;
   for (size_t i = 0; i < cams.size(); ++i) maps.push_back(r.view(i).image);
   return maps;
@@ -50,11 +51,12 @@ static void BM_RenderLossBackward512(benchmark::State& state) {
   std::vector<const Image*> refs;
   for (const NormalTarget& t : targets) refs.push_back(&t.rgba);
   const Mesh current = make_icosphere(int(state.range(0)), 0.6f);
+  const EdgeTopology topology = build_edge_topology(current.faces, current.positions.size());
   NormalRenderer r(cams);
   std::vector<Vec3f> grad;
   for (auto _ : state) {
     const VertexNormals n = compute_vertex_normals(current.positions, current.faces);
-    r.render(current.positions, current.faces, n.unit);
+    r.render(current.positions, current.faces, topology, n.unit);
     grad.assign(current.positions.size(), Vec3f::Zero());
     benchmark::DoNotOptimize(masked_image_l2(r, refs, 4, 1.f) + background_alpha_l2(r, targets, 1.f));
     r.backward(current.positions, current.faces, n, grad);

@@ -8,7 +8,8 @@ namespace u3d {
 std::string closed_manifold_problem(const std::vector<Vec3i>& faces, size_t vertex_count) {
   for (size_t f = 0; f < faces.size(); ++f)
     for (int i = 0; i < 3; ++i) {
-      if (faces[f][i] < 0 || size_t(faces[f][i]) >= vertex_count) return "face " + std::to_string(f) + " has a bad index";
+      if (faces[f][i] < 0 || size_t(faces[f][i]) >= vertex_count)
+        return "face " + std::to_string(f) + " has a bad index";
       if (faces[f][i] == faces[f][(i + 1) % 3]) return "face " + std::to_string(f) + " is degenerate";
     }
   const EdgeTopology topo = build_edge_topology(faces, vertex_count);

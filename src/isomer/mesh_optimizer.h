@@ -38,6 +38,9 @@ class MeshOptimizer {
 
   const std::vector<Vec3f>& positions() const { return positions_; }
   const std::vector<Vec3i>& faces() const { return faces_; }
+  // The edge topology of faces(), shared with remeshing: a remesh() that flips leaves it up to date, and
+  // one built here after a remesh() that did not is the one the next remesh() starts from.
+  const EdgeTopology& topology() { return topology_.of(faces_, rows_.count()); }
   float learning_rate() const { return options_.learning_rate; }
   void set_learning_rate(float lr) { options_.learning_rate = lr; }
   int steps_taken() const { return step_; }

@@ -52,9 +52,9 @@ NormalRenderer::NormalRenderer(std::vector<Camera> cameras) {
 }
 
 void NormalRenderer::render(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& faces,
-                            const std::vector<Vec3f>& vertex_normals) {
+                            const EdgeTopology& topology, const std::vector<Vec3f>& vertex_normals) {
   attributes_ = normal_color_attributes(vertex_normals);
-  neighbors_ = edge_neighbors(faces);
+  neighbors_ = edge_neighbors(faces, topology);
 #pragma omp parallel for schedule(dynamic, 1) if (views_.size() > 1)
   for (size_t slot = 0; slot < views_.size(); ++slot) {
     DifferentiableView& v = views_[size_t(largest_first_[slot])];

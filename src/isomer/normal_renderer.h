@@ -58,7 +58,8 @@ class NormalRenderer {
 
   // Renders all views of the mesh with these unit vertex normals; clears each view's grad_image (zero
   // everywhere afterwards, as long as only the active pixels were written since the last render).
-  void render(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& faces,
+  // `topology` is the edge topology of `faces` (the anti-aliasing finds silhouette edges on it).
+  void render(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& faces, const EdgeTopology& topology,
               const std::vector<Vec3f>& vertex_normals);
 
   // Renders other per-vertex unit vectors with the current views' rasters and anti-aliasing (no

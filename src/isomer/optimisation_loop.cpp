@@ -48,7 +48,7 @@ void run_optimisation_loop(MeshOptimizer& optimizer, NormalRenderer& renderer, i
     const std::vector<Vec3i>& faces = optimizer.faces();
     const VertexNormals normals = compute_vertex_normals(positions, faces);
     clock.lap(profile.step);
-    renderer.render(positions, faces, normals.unit);
+    renderer.render(positions, faces, optimizer.topology(), normals.unit);
     clock.lap(profile.render);
     grad.assign(positions.size(), Vec3f::Zero());
     loss = losses(step, positions, faces, normals, grad);

@@ -7,18 +7,7 @@
 
 namespace u3d {
 
-EdgeNeighbors edge_neighbors(const std::vector<Vec3i>& faces) {
-  // Directed edges a -> b bucketed by a (counting sort), each with its face's third vertex.
-  int vertex_count = 0;
-  for (const Vec3i& f : faces) vertex_count = std::max(vertex_count, f.maxCoeff() + 1);
-  std::vector<int> offsets(size_t(vertex_count) + 1, 0);
-  for (const Vec3i& f : faces)
-    for (int i = 0; i < 3; ++i) ++offsets[f[i] + 1];
-  for (int v = 0; v < vertex_count; ++v) offsets[v + 1] += offsets[v];
-  std::vector<std::pair<int, int>> outgoing(faces.size() * 3);  // (b, third)
-  std::vector<int> fill(offsets.begin(), offsets.end() - 1);
-  for (const Vec3i& f : faces)
-    for (int i = 0; i < 3; ++i) outgoing[fill[f[i]]++] = {f[(i + 1) % 3], f[(i + 2) % 3]};
+EdgeNeighbors edge_neighbors(const std::vector<Vec3i>& faces, const EdgeTopology& topology) {
   EdgeNeighbors n;
   n.opposite.resize(faces.size());
   const int64_t face_count = int64_t(faces.size());
@@ -27,15 +16,11 @@ EdgeNeighbors edge_neighbors(const std::vector<Vec3i>& faces) {
   for (int64_t fi = 0; fi < face_count; ++fi) {
     const Vec3i& f = faces[fi];
     for (int i = 0; i < 3; ++i) {
-      // The neighbour traverses this edge the other way round: from f[i + 2] to f[i + 1].
-      const int from = f[(i + 2) % 3], to = f[(i + 1) % 3];
-      int third = -1;
-      for (int k = offsets[from]; k < offsets[from + 1]; ++k)
-        if (outgoing[k].first == to) {
-          third = outgoing[k].second;
-          break;
-        }
-      n.opposite[fi][i] = third;
+      // The edge opposite corner i is side i + 1 (from f[i + 1] to f[i + 2]); the neighbour is the
+      // side in the other direction.
+      const int side = (i + 1) % 3, e = topology.face_edges[fi][side];
+      const int other = topology.edge_sides[e][f[side] == topology.edge_vertices[e][0] ? 1 : 0];
+      n.opposite[fi][i] = other < 0 ? -1 : faces[other / 3][(other % 3 + 2) % 3];
     }
   }
   return n;

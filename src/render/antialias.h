@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/image.h"
+#include "geometry/edge_topology.h"
 #include "render/rasterizer.h"
 #include "render/screen_projection.h"
 
@@ -17,11 +18,12 @@ namespace u3d {
 
 // For face f and corner i: the vertex across the edge opposite corner i (the third vertex of the
 // neighbouring face sharing that edge with opposite orientation), or -1 on a border. Border edges
-// always count as silhouettes.
+// always count as silhouettes. Read off the edge topology of `faces` (on an edge with more than two
+// faces, the one edge_sides keeps in the other direction).
 struct EdgeNeighbors {
   std::vector<Vec3i> opposite;
 };
-EdgeNeighbors edge_neighbors(const std::vector<Vec3i>& faces);
+EdgeNeighbors edge_neighbors(const std::vector<Vec3i>& faces, const EdgeTopology& topology);
 
 // One blended pixel pair, recorded by the forward pass for the backward pass.
 struct AntialiasPair {

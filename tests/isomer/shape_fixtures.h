@@ -34,7 +34,7 @@ inline std::vector<Camera> four_view_cameras(int resolution) {
 inline std::vector<Image> render_normal_maps(const Mesh& mesh, const std::vector<Camera>& cameras) {
   NormalRenderer r(cameras);
   const VertexNormals n = compute_vertex_normals(mesh.positions, mesh.faces);
-  r.render(mesh.positions, mesh.faces, n.unit);
+  r.render(mesh.positions, mesh.faces, build_edge_topology(mesh.faces, mesh.positions.size()), n.unit);
   std::vector<Image> maps;
   for (size_t i = 0; i < cameras.size(); ++i) {
     Image img = r.view(i).image;
@@ -80,7 +80,7 @@ inline double mean_normal_error_deg(const std::vector<Vec3f>& positions, const s
                                     const std::vector<Image>& maps, const std::vector<Camera>& cameras) {
   NormalRenderer r(cameras);
   const VertexNormals n = compute_vertex_normals(positions, faces);
-  r.render(positions, faces, n.unit);
+  r.render(positions, faces, build_edge_topology(faces, positions.size()), n.unit);
   double sum = 0;
   size_t count = 0;
   for (size_t i = 0; i < cameras.size(); ++i) {

@@ -49,7 +49,7 @@ Outcome check_image_term(Term term) {
     std::vector<int64_t> decisions;
     auto loss = [&](const std::vector<Vec3f>& pos, std::vector<Vec3f>* grad) {
       const VertexNormals n = compute_vertex_normals(pos, m.faces);
-      r.render(pos, m.faces, n.unit);
+      r.render(pos, m.faces, build_edge_topology(m.faces, pos.size()), n.unit);
       const DifferentiableView& v = r.view(0);
       decisions.assign(v.raster.face_id.begin(), v.raster.face_id.end());
       for (const AntialiasPair& a : v.pairs)

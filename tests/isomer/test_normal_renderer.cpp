@@ -16,7 +16,7 @@ TEST(NormalRenderer, CullingChangesNoPixelOfAClosedSurface) {
   cameras.push_back(perspective_camera(3.f * orbit_direction(40.f, 25.f), 96, 96, 40.f));
   NormalRenderer renderer(cameras);
   const VertexNormals normals = compute_vertex_normals(mesh.positions, mesh.faces);
-  renderer.render(mesh.positions, mesh.faces, normals.unit);
+  renderer.render(mesh.positions, mesh.faces, build_edge_topology(mesh.faces, mesh.positions.size()), normals.unit);
   for (size_t i = 0; i < cameras.size(); ++i) {
     const RasterBuffer all = rasterize(mesh, cameras[i]);
     const RasterBuffer& culled = renderer.view(i).raster;
@@ -39,7 +39,7 @@ TEST(NormalRenderer, CountsTheOpaquePixelsOfEveryFrame) {
   for (float shift : {0.f, 0.137f}) {
     for (Vec3f& p : mesh.positions) p.x() += shift;
     const VertexNormals normals = compute_vertex_normals(mesh.positions, mesh.faces);
-    renderer.render(mesh.positions, mesh.faces, normals.unit);
+    renderer.render(mesh.positions, mesh.faces, build_edge_topology(mesh.faces, mesh.positions.size()), normals.unit);
     for (size_t i = 0; i < cameras.size(); ++i) {
       const DifferentiableView& v = renderer.view(i);
       size_t opaque = 0, partial = 0;

@@ -221,7 +221,7 @@ TEST(RenderGradients, NormalRendererMatchesFiniteDifferences) {
     std::vector<int64_t> face_ids;  // raster face ids, then the blended pairs' (pixel, face, edge)
     auto loss = [&](const std::vector<Vec3f>& pos, std::vector<Vec3f>* grad) {
       VertexNormals n = compute_vertex_normals(pos, m.faces);
-      renderer.render(pos, m.faces, n.unit);
+      renderer.render(pos, m.faces, build_edge_topology(m.faces, pos.size()), n.unit);
       DifferentiableView& v = renderer.view(0);
       face_ids.assign(v.raster.face_id.begin(), v.raster.face_id.end());
       for (const AntialiasPair& a : v.pairs) face_ids.push_back((int64_t(a.pixel0) << 34) + (int64_t(a.face) << 4) + (a.edge << 1) + (a.alpha > 0.f));
