@@ -1,8 +1,7 @@
 #include "isomer/colour_completion.h"
 
-#include <algorithm>
-
 #include "core/error.h"
+#include "geometry/edge_topology.h"
 
 namespace u3d {
 
@@ -10,18 +9,7 @@ ColourCompletionReport complete_vertex_colours(const std::vector<Vec3i>& faces, 
                                                const std::vector<uint8_t>& known, int max_rounds) {
   require(colours.size() == known.size(), "colour completion: colours and known flags differ in size");
   const size_t n = colours.size();
-  // Unique neighbours per vertex (edges of the faces).
-  std::vector<std::vector<int>> neighbours(n);
-  for (const Vec3i& f : faces)
-    for (int k = 0; k < 3; ++k) {
-      const int a = f[k], b = f[(k + 1) % 3];
-      neighbours[a].push_back(b);
-      neighbours[b].push_back(a);
-    }
-  for (auto& list : neighbours) {
-    std::sort(list.begin(), list.end());
-    list.erase(std::unique(list.begin(), list.end()), list.end());
-  }
+  const EdgeTopology topo = build_edge_topology(faces, n);  // unique neighbours: the vertex rings, ascending
 
   std::vector<int> unknown;
   for (size_t v = 0; v < n; ++v)
@@ -38,8 +26,8 @@ ColourCompletionReport complete_vertex_colours(const std::vector<Vec3i>& faces, 
     for (size_t k = 0; k < unknown.size(); ++k) {
       Vec3f sum(0, 0, 0);
       int count = 0;
-      for (int nb : neighbours[unknown[k]])
-        if (coloured[nb]) sum += colours[nb], ++count;
+      for (int j = topo.ring_offsets[unknown[k]]; j < topo.ring_offsets[unknown[k] + 1]; ++j)
+        if (coloured[topo.ring[j]]) sum += colours[topo.ring[j]], ++count;
       next_coloured[k] = count > 0;
       next_colour[k] = count > 0 ? Vec3f(sum / float(count)) : colours[unknown[k]];
     }

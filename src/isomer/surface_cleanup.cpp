@@ -6,6 +6,7 @@
 
 #include "core/error.h"
 #include "geometry/disjoint_sets.h"
+#include "geometry/edge_topology.h"
 #include "geometry/loop_subdivision.h"
 #include "geometry/mesh_repair.h"
 #include "geometry/mesh_topology.h"
@@ -14,23 +15,14 @@ namespace u3d {
 
 void smooth_uniform_laplacian(Mesh& mesh, int iterations) {
   const size_t n = mesh.positions.size();
-  std::vector<std::vector<int>> neighbours(n);
-  for (const Vec3i& f : mesh.faces)
-    for (int k = 0; k < 3; ++k) {
-      neighbours[f[k]].push_back(f[(k + 1) % 3]);
-      neighbours[f[(k + 1) % 3]].push_back(f[k]);
-    }
-  for (auto& list : neighbours) {
-    std::sort(list.begin(), list.end());
-    list.erase(std::unique(list.begin(), list.end()), list.end());
-  }
+  const EdgeTopology topo = build_edge_topology(mesh.faces, n);  // rings in ascending order
   for (int it = 0; it < iterations; ++it) {
     std::vector<Vec3f> next = mesh.positions;
     for (size_t v = 0; v < n; ++v) {
-      if (neighbours[v].empty()) continue;
+      if (topo.degree(int(v)) == 0) continue;
       Vec3f sum = mesh.positions[v];
-      for (int nb : neighbours[v]) sum += mesh.positions[nb];
-      next[v] = sum / float(neighbours[v].size() + 1);
+      for (int k = topo.ring_offsets[v]; k < topo.ring_offsets[v + 1]; ++k) sum += mesh.positions[topo.ring[k]];
+      next[v] = sum / float(topo.degree(int(v)) + 1);
     }
     mesh.positions = std::move(next);
   }
