@@ -38,6 +38,7 @@ class MeshOptimizer {
 
   const std::vector<Vec3f>& positions() const { return positions_; }
   const std::vector<Vec3i>& faces() const { return faces_; }
+  Mesh mesh() const;  // the current positions and faces
   float learning_rate() const { return options_.learning_rate; }
   void set_learning_rate(float lr) { options_.learning_rate = lr; }
   int steps_taken() const { return step_; }

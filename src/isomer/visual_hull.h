@@ -15,7 +15,7 @@
 // brings it to `target_faces`, still closed and manifold.
 #include "core/mesh.h"
 #include "isomer/marching_tetrahedra.h"
-#include "isomer/view_set.h"
+#include "core/view_set.h"
 
 namespace u3d {
 

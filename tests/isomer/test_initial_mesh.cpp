@@ -6,8 +6,8 @@
 #include "isomer/initial_mesh.h"
 #include "isomer/mesh_topology.h"
 #include "isomer/remesh/manifold_check.h"
-#include "isomer/view_set.h"
-#include "synthetic_views.h"
+#include "core/view_set.h"
+#include "core/synthetic_views.h"
 
 namespace u3d {
 namespace {

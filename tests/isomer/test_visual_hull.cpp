@@ -9,7 +9,7 @@
 #include "isomer/remesh/manifold_check.h"
 #include "isomer/mesh_topology.h"
 #include "isomer/visual_hull.h"
-#include "synthetic_views.h"
+#include "core/synthetic_views.h"
 
 namespace u3d {
 namespace {

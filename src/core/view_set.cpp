@@ -1,4 +1,4 @@
-#include "isomer/view_set.h"
+#include "core/view_set.h"
 
 #include <Eigen/Core>
 #include <algorithm>

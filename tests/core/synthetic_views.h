@@ -4,7 +4,8 @@
 #include <cmath>
 #include <functional>
 
-#include "isomer/view_set.h"
+#include "core/mesh.h"
+#include "core/view_set.h"
 
 namespace u3d::testing {
 

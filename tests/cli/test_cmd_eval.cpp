@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "io/mesh_io.h"
-#include "test_shapes.h"
+#include "eval/test_shapes.h"
 
 using namespace u3d;
 namespace fs = std::filesystem;
