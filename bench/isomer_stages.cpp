@@ -84,9 +84,9 @@ static void BM_Stages512(benchmark::State& state) {
   refine.max_vertices = size_t(state.range(0));
   for (auto _ : state) {
     StageReport coarse_report, refine_report;
-    const StageMesh coarse = run_coarse_stage(sphere_initial_mesh(), maps, cams, CoarseStageOptions::from_sphere(),
-                                              &coarse_report);
-    const StageMesh refined = run_refine_stage(coarse, maps, cams, refine, &refine_report);
+    const Mesh coarse = run_coarse_stage(sphere_initial_mesh(), {maps, cams}, CoarseStageOptions::from_sphere(),
+                                         &coarse_report);
+    const Mesh refined = run_refine_stage(coarse, {maps, cams}, refine, &refine_report);
     state.counters["coarse_s"] = coarse_report.seconds;
     state.counters["refine_s"] = refine_report.seconds;
     state.counters["vertices"] = double(refined.positions.size());

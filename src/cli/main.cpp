@@ -40,7 +40,8 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
-  set_progress_quiet(quiet);
+  StderrProgress progress_lines(quiet);
+  ProgressScope progress_scope(&progress_lines);
   keep_freed_memory_for_reuse();
   configure_threads(threads);
   try {

@@ -43,4 +43,12 @@ void ensure_directory(const fs::path& dir) {
   if (ec) throw Error("cannot create output folder " + dir.string() + ": " + ec.message());
 }
 
+bool path_exists(const fs::path& path) {
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (ec && ec != std::errc::no_such_file_or_directory && ec != std::errc::not_a_directory)
+    throw Error(path.string() + ": " + ec.message());
+  return fs::exists(status);
+}
+
 }  // namespace u3d

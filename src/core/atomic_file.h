@@ -1,6 +1,7 @@
 #pragma once
 // Output files are never left half-written: writers produce a temporary file beside the target and
-// rename it into place only after the write succeeded.
+// rename it into place only after the write succeeded. Also the checks of input paths that must end in
+// an Error naming the path rather than a filesystem exception.
 #include <filesystem>
 #include <functional>
 
@@ -14,5 +15,9 @@ void write_atomically(const std::filesystem::path& path,
 
 // Creates dir (and parents) or throws Error naming it; succeeds if it already exists.
 void ensure_directory(const std::filesystem::path& dir);
+
+// Whether something is at `path` (following symlinks). A path that cannot be checked (a symlink loop,
+// a folder without permission) is an Error naming it; a missing one is just false.
+bool path_exists(const std::filesystem::path& path);
 
 }  // namespace u3d

@@ -56,4 +56,8 @@ Eigen::Vector3f orbit_direction(float azimuth_deg, float elevation_deg);
 // Orthographic camera of a canonical view covering [-1,1]^2 world units at resolution x resolution.
 Camera view_camera(View v, int resolution);
 
+// The space a normal map encodes its normals in: world space, or its view's camera space (x right,
+// y up, z toward the camera).
+enum class NormalSpace { World, Camera };
+
 }  // namespace u3d

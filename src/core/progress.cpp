@@ -2,26 +2,68 @@
 
 #include <atomic>
 #include <cstdio>
+#include <exception>
 
 namespace u3d {
+namespace {
 
-static std::atomic<bool> g_quiet{false};
+std::atomic<bool> g_quiet{false};
+thread_local ProgressListener* t_listener = nullptr;
 
-void set_progress_quiet(bool quiet) { g_quiet = quiet; }
-bool progress_quiet() { return g_quiet; }
+ProgressListener& listener() {
+  if (t_listener) return *t_listener;
+  thread_local StderrProgress printing(false), quiet(true);
+  return g_quiet ? static_cast<ProgressListener&>(quiet) : printing;
+}
 
-void progress(const std::string& message) {
-  if (g_quiet) return;
-  std::fprintf(stderr, "[unique3d] %s\n", message.c_str());
+void emit(ProgressEvent event) { listener().on_event(event); }
+
+}  // namespace
+
+void StderrProgress::on_event(const ProgressEvent& event) {
+  if (quiet_) return;
+  std::string line;
+  switch (event.kind) {
+    case ProgressEvent::Kind::StageBegin: line = event.text + " ..."; break;
+    case ProgressEvent::Kind::StageEnd: {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, " done in %.2f s", event.seconds);
+      line = event.text + buf;
+      break;
+    }
+    case ProgressEvent::Kind::Message: line = event.text; break;
+    case ProgressEvent::Kind::Step: return;
+  }
+  std::fprintf(stderr, "[unique3d] %s\n", line.c_str());
   std::fflush(stderr);
 }
 
-StageTimer::StageTimer(std::string name, bool announce) : name_(std::move(name)), start_(std::chrono::steady_clock::now()) {
-  if (announce) progress(name_ + " ...");
+ProgressScope::ProgressScope(ProgressListener* l) : previous_(t_listener) { t_listener = l; }
+ProgressScope::~ProgressScope() { t_listener = previous_; }
+
+void set_progress_quiet(bool quiet) { g_quiet = quiet; }
+
+void progress(const std::string& message) { emit({ProgressEvent::Kind::Message, message}); }
+
+void progress_step(const std::string& stage, int step, int steps) {
+  emit({ProgressEvent::Kind::Step, stage, 0.0, step, steps});
+  check_cancelled();
+}
+
+void check_cancelled() {
+  if (listener().cancel_requested()) throw Cancelled();
+}
+
+StageTimer::StageTimer(std::string name, bool announce)
+    : name_(std::move(name)), exceptions_(std::uncaught_exceptions()) {
+  check_cancelled();
+  if (announce) emit({ProgressEvent::Kind::StageBegin, name_});
+  start_ = std::chrono::steady_clock::now();
 }
 
 StageTimer::~StageTimer() {
-  if (!finished_) finish();
+  // A stage left by an exception did not finish: only the error is reported.
+  if (!finished_ && std::uncaught_exceptions() == exceptions_) finish();
 }
 
 double StageTimer::seconds() const {
@@ -29,12 +71,10 @@ double StageTimer::seconds() const {
 }
 
 double StageTimer::finish() {
-  double s = seconds();
+  const double s = seconds();
   if (!finished_) {
     finished_ = true;
-    char buf[64];
-    std::snprintf(buf, sizeof buf, " done in %.2f s", s);
-    progress(name_ + buf);
+    emit({ProgressEvent::Kind::StageEnd, name_, s});
   }
   return s;
 }

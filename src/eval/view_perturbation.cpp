@@ -91,22 +91,27 @@ void add_normal_noise(Image& normal_map, float sigma, uint64_t seed) {
 }
 
 void perturb_view_set(const fs::path& in_dir, const fs::path& out_dir, const PerturbOptions& options) {
-  require(fs::is_directory(in_dir), "view folder " + in_dir.string() + " does not exist");
+  require(path_exists(in_dir) && fs::is_directory(in_dir), "view folder " + in_dir.string() + " does not exist");
   require(fs::absolute(in_dir).lexically_normal() != fs::absolute(out_dir).lexically_normal(),
           "output folder must differ from the input folder " + in_dir.string());
-  ensure_directory(out_dir);
-  std::vector<std::string> view_files;
+  // Every input is read and perturbed before the first output is written, so a bad file leaves no
+  // partial output folder behind.
+  struct Output {
+    std::string name;
+    Image image;
+    int bit_depth;
+  };
+  std::vector<Output> outputs;
   for (View v : kAllViews) {
     const std::string name = view_name(v);
     const ViewWarp& warp = options.warps[int(v)];
     const fs::path rgb_path = in_dir / (name + "_rgb.png"), normal_path = in_dir / (name + "_normal.png");
-    if (fs::exists(rgb_path)) {
+    if (path_exists(rgb_path)) {
       Image rgb = load_image_rgba(rgb_path);
       if (!warp.identity()) rgb = warp_image(rgb, warp, false);
-      save_image(rgb, out_dir / rgb_path.filename());
-      view_files.push_back(rgb_path.filename().string());
+      outputs.push_back({rgb_path.filename().string(), std::move(rgb), 8});
     }
-    if (fs::exists(normal_path)) {
+    if (path_exists(normal_path)) {
       Image normal = load_image_rgba(normal_path);
       if (!warp.identity()) {
         normal = warp_image(normal, warp, true);
@@ -117,19 +122,23 @@ void perturb_view_set(const fs::path& in_dir, const fs::path& out_dir, const Per
       }
       // One stream per view, so a view's noise does not depend on which other views exist.
       if (options.normal_noise > 0) add_normal_noise(normal, options.normal_noise, options.seed * 4 + int(v));
-      save_image(normal, out_dir / normal_path.filename(), 16);
-      view_files.push_back(normal_path.filename().string());
+      outputs.push_back({normal_path.filename().string(), std::move(normal), 16});
     }
   }
-  require(!view_files.empty(), "view folder " + in_dir.string() +
-                                   " holds no <view>_rgb.png or <view>_normal.png (front, right, back, left)");
+  require(!outputs.empty(), "view folder " + in_dir.string() +
+                                " holds no <view>_rgb.png or <view>_normal.png (front, right, back, left)");
+  std::vector<fs::path> companions;  // other files of the set (e.g. a ground-truth mesh), copied along
   for (const auto& entry : fs::directory_iterator(in_dir)) {
     const std::string name = entry.path().filename().string();
-    if (!entry.is_regular_file() || name == "perturbation.json" ||
-        std::find(view_files.begin(), view_files.end(), name) != view_files.end())
-      continue;
-    write_atomically(out_dir / name, [&](const fs::path& tmp) { fs::copy_file(entry.path(), tmp); });
+    const bool view_file = std::any_of(outputs.begin(), outputs.end(), [&](const Output& o) { return o.name == name; });
+    std::error_code ec;  // a companion that is not a readable file (a dangling link, a loop) is not copied
+    if (entry.is_regular_file(ec) && name != "perturbation.json" && !view_file) companions.push_back(entry.path());
   }
+
+  ensure_directory(out_dir);
+  for (const Output& o : outputs) save_image(o.image, out_dir / o.name, o.bit_depth);
+  for (const fs::path& path : companions)
+    write_atomically(out_dir / path.filename(), [&](const fs::path& tmp) { fs::copy_file(path, tmp); });
   nlohmann::json record;
   record["source"] = in_dir.string();
   record["seed"] = options.seed;

@@ -311,8 +311,13 @@ Mesh read_gltf(const fs::path& path) {
   std::string err, warn;
   std::string ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  bool ok = ext == ".glb" ? loader.LoadBinaryFromFile(&model, &err, &warn, file)
-                          : loader.LoadASCIIFromFile(&model, &err, &warn, file);
+  bool ok = false;
+  try {
+    ok = ext == ".glb" ? loader.LoadBinaryFromFile(&model, &err, &warn, file)
+                       : loader.LoadASCIIFromFile(&model, &err, &warn, file);
+  } catch (const std::exception& e) {  // tinygltf's parser lets some index errors escape as exceptions
+    throw Error("cannot read glTF file " + file + ": " + e.what());
+  }
   require(ok, "cannot read glTF file " + file + ": " + std::string(trim(err.empty() ? warn : err)));
   for (const auto& extension : model.extensionsRequired)
     require(extension_supported(extension), file + ": requires glTF extension " + extension + ", which is not supported");

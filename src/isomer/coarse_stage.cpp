@@ -16,18 +16,13 @@ CoarseStageOptions CoarseStageOptions::from_sphere() {
   return o;
 }
 
-StageMesh sphere_initial_mesh() {
-  Mesh m = make_icosphere(3, 0.5f);
-  return {m.positions, m.faces};
-}
+Mesh sphere_initial_mesh() { return make_icosphere(3, 0.5f); }
 
-StageMesh run_coarse_stage(const StageMesh& initial, const std::vector<Image>& input_maps,
-                           const std::vector<Camera>& input_cameras, const CoarseStageOptions& options,
-                           StageReport* report) {
+Mesh run_coarse_stage(const Mesh& initial, const NormalViews& input, const CoarseStageOptions& options,
+                      StageReport* report) {
   StageTimer timer("coarse reconstruction");
-  const StageViewTargets views =
-      prepare_stage_views("coarse stage", input_maps, input_cameras, options.render_resolution);
-  const std::vector<NormalTarget>& targets = views.targets;
+  const NormalViews views = prepare_stage_views("coarse stage", input, options.render_resolution);
+  const std::vector<NormalTarget> targets = normal_targets(views);
   std::vector<const Image*> references;
   for (const NormalTarget& t : targets) references.push_back(&t.rgba);
 
@@ -48,9 +43,9 @@ StageMesh run_coarse_stage(const StageMesh& initial, const std::vector<Image>& i
     loss += out_of_box_loss(positions, options.out_of_box_limit, options.out_of_box_weight, grad);
     return loss;
   };
-  run_optimisation_loop(optimizer, renderer, options.steps, options.lr_decay, losses, report);
+  run_optimisation_loop("coarse reconstruction", optimizer, renderer, options.steps, options.lr_decay, losses, report);
   if (report) report->seconds = timer.finish();
-  return {optimizer.positions(), optimizer.faces()};
+  return optimizer.mesh();
 }
 
 }  // namespace u3d

@@ -3,11 +3,8 @@
 // their masks with the differentiable normal renderer and the continuous-remeshing optimizer, shrinking
 // the edge length from start to end. Losses: normal L2 where the mesh is rendered, alpha L2 where the
 // target is background, expansion along normals (paper Fig. 5b) and an out-of-box penalty.
-#include <vector>
-
-#include "core/camera.h"
-#include "core/image.h"
 #include "core/mesh.h"
+#include "isomer/normal_views.h"
 #include "isomer/stage_report.h"
 
 namespace u3d {
@@ -32,17 +29,12 @@ struct CoarseStageOptions {
   static CoarseStageOptions from_sphere();
 };
 
-struct StageMesh {
-  std::vector<Vec3f> positions;
-  std::vector<Vec3i> faces;
-};
-
 // The sphere initialisation: an icosphere of radius 0.5 (about 640 faces).
-StageMesh sphere_initial_mesh();
+Mesh sphere_initial_mesh();
 
-// normal_maps[i]: RGBA, RGB = (n + 1) / 2 in world space, alpha = mask, same size as cameras[i].
-StageMesh run_coarse_stage(const StageMesh& initial, const std::vector<Image>& normal_maps,
-                           const std::vector<Camera>& cameras, const CoarseStageOptions& options = {},
-                           StageReport* report = nullptr);
+// Fits the geometry of `initial` (its colours are ignored) to the views; the result has positions and
+// faces only.
+Mesh run_coarse_stage(const Mesh& initial, const NormalViews& views, const CoarseStageOptions& options = {},
+                      StageReport* report = nullptr);
 
 }  // namespace u3d

@@ -17,7 +17,7 @@
 
 #include "core/image.h"
 #include "core/mesh.h"
-#include "isomer/view_set.h"
+#include "core/view_set.h"
 
 namespace u3d {
 

@@ -15,7 +15,7 @@
 // orthographic frame, so it also centres the object in depth.
 #include "core/mesh.h"
 #include "isomer/normal_integration.h"
-#include "isomer/view_set.h"
+#include "core/view_set.h"
 
 namespace u3d {
 

@@ -39,6 +39,13 @@ void MeshOptimizer::refresh_positions() {
   for (size_t v = 0; v < rows_.count(); ++v) positions_[v] = rows_.position(v);
 }
 
+Mesh MeshOptimizer::mesh() const {
+  Mesh m;
+  m.positions = positions_;
+  m.faces = faces_;
+  return m;
+}
+
 float MeshOptimizer::mean_reference_edge_length() const {
   double s = 0;
   for (size_t v = 0; v < rows_.count(); ++v) s += rows_.row(v)[kRefLen];

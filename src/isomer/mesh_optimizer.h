@@ -41,6 +41,7 @@ class MeshOptimizer {
   // The edge topology of faces(), shared with remeshing: a remesh() that flips leaves it up to date, and
   // one built here after a remesh() that did not is the one the next remesh() starts from.
   const EdgeTopology& topology() { return topology_.of(faces_, rows_.count()); }
+  Mesh mesh() const;  // the current positions and faces
   float learning_rate() const { return options_.learning_rate; }
   void set_learning_rate(float lr) { options_.learning_rate = lr; }
   int steps_taken() const { return step_; }

@@ -3,7 +3,7 @@
 #include <chrono>
 
 #include "core/error.h"
-#include "isomer/view_resolution.h"
+#include "core/progress.h"
 
 namespace u3d {
 
@@ -24,20 +24,19 @@ class LapClock {
 
 }  // namespace
 
-StageViewTargets prepare_stage_views(const std::string& stage, const std::vector<Image>& normal_maps,
-                                     const std::vector<Camera>& cameras, int render_resolution) {
-  require(!normal_maps.empty() && normal_maps.size() == cameras.size(), stage + ": one normal map per camera");
-  for (size_t i = 0; i < cameras.size(); ++i)
-    require(normal_maps[i].width == cameras[i].width && normal_maps[i].height == cameras[i].height,
-            stage + ": normal map " + std::to_string(i) + " does not match its camera resolution");
-  ViewsAtResolution views = views_at_resolution(normal_maps, cameras, render_resolution);
-  StageViewTargets out{std::move(views.normal_maps), std::move(views.cameras), {}};
-  for (const Image& map : out.normal_maps) out.targets.push_back(make_normal_target(map));
-  return out;
+NormalViews prepare_stage_views(const std::string& stage, const NormalViews& views, int render_resolution) {
+  check_normal_views(views, stage);
+  return at_resolution(views, render_resolution);
 }
 
-void run_optimisation_loop(MeshOptimizer& optimizer, NormalRenderer& renderer, int steps, float lr_decay,
-                           const StageLosses& losses, StageReport* report) {
+std::vector<NormalTarget> normal_targets(const NormalViews& views) {
+  std::vector<NormalTarget> targets;
+  for (const Image& map : views.normal_maps) targets.push_back(make_normal_target(map));
+  return targets;
+}
+
+void run_optimisation_loop(const std::string& stage, MeshOptimizer& optimizer, NormalRenderer& renderer, int steps,
+                           float lr_decay, const StageLosses& losses, StageReport* report) {
   StageProfile profile;
   std::vector<Vec3f> grad;
   double loss = 0.0;
@@ -59,6 +58,7 @@ void run_optimisation_loop(MeshOptimizer& optimizer, NormalRenderer& renderer, i
     clock.lap(profile.step);
     optimizer.remesh();
     clock.lap(profile.remesh);
+    progress_step(stage, step + 1, steps);
   }
   if (report) {
     report->steps = steps;

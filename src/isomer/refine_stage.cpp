@@ -7,15 +7,13 @@
 
 namespace u3d {
 
-StageMesh run_refine_stage(const StageMesh& coarse, const std::vector<Image>& input_maps,
-                           const std::vector<Camera>& input_cameras, const RefineStageOptions& options,
-                           StageReport* report) {
+Mesh run_refine_stage(const Mesh& coarse, const NormalViews& input, const RefineStageOptions& options,
+                      StageReport* report) {
   StageTimer timer("mesh refinement");
-  const StageViewTargets views =
-      prepare_stage_views("refine stage", input_maps, input_cameras, options.render_resolution);
+  const NormalViews views = prepare_stage_views("refine stage", input, options.render_resolution);
   const std::vector<Image>& normal_maps = views.normal_maps;
   const std::vector<Camera>& cameras = views.cameras;
-  const std::vector<NormalTarget>& targets = views.targets;
+  const std::vector<NormalTarget> targets = normal_targets(views);
 
   MeshOptimizerOptions opt;
   opt.learning_rate = options.learning_rate;
@@ -51,9 +49,9 @@ StageMesh run_refine_stage(const StageMesh& coarse, const std::vector<Image>& in
     loss += out_of_box_loss(positions, options.out_of_box_limit, options.out_of_box_weight, grad);
     return loss;
   };
-  run_optimisation_loop(optimizer, renderer, options.steps, options.lr_decay, losses, report);
+  run_optimisation_loop("mesh refinement", optimizer, renderer, options.steps, options.lr_decay, losses, report);
   if (report) report->seconds = timer.finish();
-  return {optimizer.positions(), optimizer.faces()};
+  return optimizer.mesh();
 }
 
 }  // namespace u3d

@@ -3,12 +3,10 @@
 // Every few steps (every step during warm-up) each vertex gets a fused target normal from all views;
 // those targets are rendered with the current geometry, and the rendered normals are pulled toward
 // these target images (where the mesh is rendered), plus the alpha loss on the target background.
-#include <vector>
-
-#include "core/camera.h"
-#include "core/image.h"
-#include "isomer/coarse_stage.h"
+#include "core/mesh.h"
 #include "isomer/explicit_target_normals.h"
+#include "isomer/normal_views.h"
+#include "isomer/stage_report.h"
 
 namespace u3d {
 
@@ -39,9 +37,8 @@ struct RefineStageOptions {
   unsigned seed = 2;
 };
 
-// normal_maps[i]: RGBA, RGB = (n + 1) / 2 in world space, alpha = mask, same size as cameras[i].
-StageMesh run_refine_stage(const StageMesh& coarse, const std::vector<Image>& normal_maps,
-                           const std::vector<Camera>& cameras, const RefineStageOptions& options = {},
-                           StageReport* report = nullptr);
+// Refines the geometry of `coarse` (its colours are ignored); the result has positions and faces only.
+Mesh run_refine_stage(const Mesh& coarse, const NormalViews& views, const RefineStageOptions& options = {},
+                      StageReport* report = nullptr);
 
 }  // namespace u3d

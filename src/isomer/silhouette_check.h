@@ -4,7 +4,7 @@
 #include <array>
 
 #include "core/mesh.h"
-#include "isomer/view_set.h"
+#include "core/view_set.h"
 
 namespace u3d {
 

@@ -14,8 +14,8 @@
 // normals. It has about a million faces at resolution 256; quadric decimation (quadric_decimation.h)
 // brings it to `target_faces`, still closed and manifold.
 #include "core/mesh.h"
+#include "core/view_set.h"
 #include "geometry/marching_tetrahedra.h"
-#include "isomer/view_set.h"
 
 namespace u3d {
 

@@ -10,9 +10,6 @@
 
 namespace u3d {
 
-// World space, or camera space (x right, y up, z toward the camera).
-enum class NormalSpace { World, Camera };
-
 // Normal map RGB = (n + 1) / 2 from per-vertex normals interpolated with the barycentrics and
 // renormalized (faces whose interpolated normal vanishes fall back to their geometric normal).
 Image shade_vertex_normals(const RasterBuffer& buf, const std::vector<Vec3f>& positions,

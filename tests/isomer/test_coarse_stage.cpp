@@ -14,9 +14,9 @@ TEST(CoarseStage, SphereConvergesToTheShapeOfItsFourViews) {
   const Mesh truth = bulged_ellipsoid();
   const std::vector<Camera> cameras = four_view_cameras(256);
   const std::vector<Image> maps = render_normal_maps(truth, cameras);
-  const StageMesh start = sphere_initial_mesh();
+  const Mesh start = sphere_initial_mesh();
   StageReport report;
-  const StageMesh result = run_coarse_stage(start, maps, cameras, CoarseStageOptions::from_sphere(), &report);
+  const Mesh result = run_coarse_stage(start, {maps, cameras}, CoarseStageOptions::from_sphere(), &report);
   const double before = chamfer_distance(surface_points(start.positions, start.faces),
                                          surface_points(truth.positions, truth.faces));
   const double after = chamfer_distance(surface_points(result.positions, result.faces),

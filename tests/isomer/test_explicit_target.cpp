@@ -5,7 +5,7 @@
 
 #include "isomer/colour_completion.h"
 #include "isomer/explicit_target.h"
-#include "synthetic_views.h"
+#include "core/synthetic_views.h"
 
 namespace u3d {
 namespace {

@@ -3,11 +3,11 @@
 
 #include <random>
 
+#include "core/synthetic_views.h"
+#include "core/view_set.h"
 #include "geometry/manifold_check.h"
 #include "geometry/mesh_topology.h"
 #include "isomer/initial_mesh.h"
-#include "isomer/view_set.h"
-#include "synthetic_views.h"
 
 namespace u3d {
 namespace {

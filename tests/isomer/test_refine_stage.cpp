@@ -31,7 +31,7 @@ TEST(RefineStage, LowersNormalErrorOfACoarseMesh) {
   const std::vector<Image> maps = render_normal_maps(truth, cameras);
   const Mesh coarse = plain_ellipsoid();
   StageReport report;
-  const StageMesh refined = run_refine_stage({coarse.positions, coarse.faces}, maps, cameras, test_options(), &report);
+  const Mesh refined = run_refine_stage(coarse, {maps, cameras}, test_options(), &report);
   const double before = mean_normal_error_deg(coarse.positions, coarse.faces, maps, cameras);
   const double after = mean_normal_error_deg(refined.positions, refined.faces, maps, cameras);
   const double chamfer_before = chamfer_distance(surface_points(coarse.positions, coarse.faces),
@@ -64,8 +64,8 @@ TEST(RefineStage, ExplicitTargetBeatsPlainMultiViewLossOnInconsistentViews) {
   const Mesh coarse = plain_ellipsoid();
   RefineStageOptions et = test_options(), plain = test_options();
   plain.use_explicit_target = false;
-  const StageMesh with_et = run_refine_stage({coarse.positions, coarse.faces}, maps, cameras, et);
-  const StageMesh without = run_refine_stage({coarse.positions, coarse.faces}, maps, cameras, plain);
+  const Mesh with_et = run_refine_stage(coarse, {maps, cameras}, et);
+  const Mesh without = run_refine_stage(coarse, {maps, cameras}, plain);
   const double error_et = mean_normal_error_deg(with_et.positions, with_et.faces, true_maps, cameras);
   const double error_plain = mean_normal_error_deg(without.positions, without.faces, true_maps, cameras);
   const double chamfer_et = chamfer_distance(surface_points(with_et.positions, with_et.faces),

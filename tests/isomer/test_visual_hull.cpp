@@ -9,7 +9,7 @@
 #include "geometry/manifold_check.h"
 #include "geometry/mesh_topology.h"
 #include "isomer/visual_hull.h"
-#include "synthetic_views.h"
+#include "core/synthetic_views.h"
 
 namespace u3d {
 namespace {

@@ -1,4 +1,4 @@
-#include "isomer/view_set.h"
+#include "core/view_set.h"
 
 #include <Eigen/Core>
 #include <algorithm>
@@ -6,6 +6,7 @@
 #include <fstream>
 #include <vector>
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 
 namespace u3d {
@@ -174,11 +175,12 @@ ViewSet make_view_set(std::array<Image, 4> rgb, std::array<Image, 4> normal_maps
 }
 
 ViewSet load_view_set(const std::filesystem::path& dir, NormalSpace space) {
-  require(std::filesystem::is_directory(dir), "views folder " + dir.string() + " does not exist or is not a folder");
+  require(path_exists(dir) && std::filesystem::is_directory(dir),
+          "views folder " + dir.string() + " does not exist or is not a folder");
   std::string missing;
   for (View v : kAllViews)
     for (bool normal : {false, true})
-      if (!std::filesystem::is_regular_file(dir / view_file_name(v, normal)))
+      if (const auto path = dir / view_file_name(v, normal); !path_exists(path) || !std::filesystem::is_regular_file(path))
         missing += (missing.empty() ? "" : ", ") + view_file_name(v, normal);
   require(missing.empty(), "views folder " + dir.string() + " lacks " + missing);
 

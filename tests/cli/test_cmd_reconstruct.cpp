@@ -10,7 +10,7 @@
 
 #include "geometry/mesh_topology.h"
 #include "io/mesh_io.h"
-#include "synthetic_views.h"
+#include "core/synthetic_views.h"
 
 namespace u3d {
 namespace {

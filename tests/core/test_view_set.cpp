@@ -111,7 +111,16 @@ TEST(ViewSet, RejectsBadInputWithClearMessages) {
       for (int c = 0; c < 3; ++c) img.data[p * 4 + c] = 0.5f;
     save_image(img, d / "front_normal.png");
   }, "not unit normals");
+  expect_error("symlink_loop", [](auto& d) {
+    std::filesystem::remove(d / "front_rgb.png");
+    std::filesystem::create_symlink(d / "loop_b", d / "loop_a");
+    std::filesystem::create_symlink(d / "loop_a", d / "loop_b");
+    std::filesystem::create_symlink(d / "loop_a", d / "front_rgb.png");
+  }, "front_rgb.png: Too many levels of symbolic links");
   EXPECT_NE(load_error("/nonexistent/views").find("does not exist"), std::string::npos);
+  const auto loop = fresh_temp_dir("views_loop");
+  std::filesystem::create_symlink(loop / "self", loop / "self");
+  EXPECT_NE(load_error(loop / "self").find("Too many levels of symbolic links"), std::string::npos);
 }
 
 TEST(ViewSet, RejectsNaN) {

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "core/image.h"
 #include "geometry/test_shapes.h"
 #include "io/mesh_io.h"
 
@@ -83,4 +84,26 @@ TEST_F(CliEval, PerturbRejectsBadViewSpecs) {
                                " --scale-view back:big", dir);
   EXPECT_EQ(bad_number.status, 1);
   EXPECT_NE(bad_number.output.find("not a number"), std::string::npos) << bad_number.output;
+}
+
+// A bad file among the inputs fails the run before anything is written: no folder at -o, no early
+// outputs; a symlink loop is named in an ordinary error.
+TEST_F(CliEval, PerturbWritesNothingWhenAnInputIsBad) {
+  fs::create_directories(dir / "views");
+  save_image(Image(16, 16, 4, 1.f), dir / "views" / "front_rgb.png");
+  save_image(Image(16, 16, 4, 1.f), dir / "views" / "front_normal.png");
+  std::ofstream(dir / "views" / "left_normal.png") << "not a picture";
+  CliRun corrupt = run_cli("perturb " + (dir / "views").string() + " -o " + (dir / "out").string(), dir);
+  EXPECT_EQ(corrupt.status, 1) << corrupt.output;
+  EXPECT_NE(corrupt.output.find("unique3d: error: "), std::string::npos) << corrupt.output;
+  EXPECT_NE(corrupt.output.find("left_normal.png"), std::string::npos) << corrupt.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+
+  fs::remove(dir / "views" / "left_normal.png");
+  fs::create_symlink(dir / "views" / "left_normal.png", dir / "views" / "left_normal.png");
+  CliRun loop = run_cli("perturb " + (dir / "views").string() + " -o " + (dir / "out").string(), dir);
+  EXPECT_EQ(loop.status, 1) << loop.output;
+  EXPECT_NE(loop.output.find("unique3d: error: "), std::string::npos) << loop.output;
+  EXPECT_NE(loop.output.find("Too many levels of symbolic links"), std::string::npos) << loop.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
 }

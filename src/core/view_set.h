@@ -1,6 +1,6 @@
 #pragma once
-// The input of ISOMER: four orthographic views (front, right, back, left), each an RGB image and a
-// normal map, in the layout `unique3d render` writes:
+// A view set: the four orthographic views (front, right, back, left) that ISOMER reconstructs from and
+// that `unique3d render` writes, each an RGB image and a normal map. Its folder layout:
 //   VIEWS_DIR/{front,right,back,left}_{rgb,normal}.png
 // Images are square PNGs (8 or 16 bit); RGB and normal maps may differ in resolution, but all RGB
 // images share one size and all normal maps share one size.
@@ -20,7 +20,6 @@
 
 #include "core/camera.h"
 #include "core/image.h"
-#include "render/shade.h"  // NormalSpace
 
 namespace u3d {
 

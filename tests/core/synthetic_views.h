@@ -4,7 +4,8 @@
 #include <cmath>
 #include <functional>
 
-#include "isomer/view_set.h"
+#include "core/mesh.h"
+#include "core/view_set.h"
 
 namespace u3d::testing {
 
@@ -39,7 +40,10 @@ inline ViewSet sphere_views(float radius, int resolution,
 
 }  // namespace u3d::testing
 
+#include <unistd.h>
+
 #include <filesystem>
+#include <string>
 
 namespace u3d::testing {
 
@@ -55,9 +59,10 @@ inline void write_view_set(const ViewSet& views, const std::filesystem::path& di
   }
 }
 
-// A fresh empty folder under the system temp folder.
+// A fresh empty folder under the system temp folder, apart from other test processes' folders.
 inline std::filesystem::path fresh_temp_dir(const std::string& name) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("u3d_isomer_" + name);
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("u3d_test_" + name + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;

@@ -1,0 +1,44 @@
+#pragma once
+// The library's facade for ISOMER: a view-set folder in, a mesh file (and previews) out, with the
+// reports `unique3d reconstruct` prints. The CLI only turns options into a ReconstructRequest and prints
+// the summary; a web page or a Python binding calls the same function with its own ProgressListener.
+#include <array>
+#include <filesystem>
+#include <vector>
+
+#include "core/camera.h"
+#include "core/mesh.h"
+#include "core/progress.h"
+#include "geometry/mesh_topology.h"
+#include "isomer/reconstruct.h"
+
+namespace u3d {
+
+// The official app writes 0.675 * p (conventions.md 2.0: scale 1.35 / 2, no rotation).
+inline constexpr float kOfficialOutputScale = 0.675f;
+
+struct ReconstructRequest {
+  std::filesystem::path views_dir;  // front/right/back/left _rgb.png and _normal.png (core/view_set.h)
+  NormalSpace normal_space = NormalSpace::World;
+  std::filesystem::path output;  // .glb, .obj or .ply
+  bool previews = false;         // also <stem>_views.png (the four views) and <stem>_turntable.png
+  bool official_output_scale = false;  // write the mesh scaled by kOfficialOutputScale
+  ReconstructOptions options;
+};
+
+struct ReconstructSummary {
+  Mesh mesh;  // as reconstructed, in the views' frame (the file may be scaled)
+  MeshTopology topology;
+  ColouringReport colouring;
+  std::array<float, 4> silhouette_iou{};  // per view, against the input masks
+  std::vector<StageTiming> timings;       // "load", ISOMER's stages, "write", "previews" (if written)
+  std::vector<std::filesystem::path> written;
+  double total_seconds() const;
+};
+
+// Checks the request and the view set before any work (Error naming the file or value), reconstructs,
+// and writes the outputs only after everything else succeeded (each atomically). Progress and
+// cancellation go through `listener` (none: the thread's current one).
+ReconstructSummary reconstruct_folder(const ReconstructRequest& request, ProgressListener* listener = nullptr);
+
+}  // namespace u3d
