@@ -37,8 +37,8 @@ void run(const ReconstructArgs& args) {
   const ReconstructSummary s = reconstruct_folder(make_request(args));
   std::printf("mesh: %zu vertices, %zu faces, %s\n", s.mesh.vertex_count(), s.mesh.face_count(),
               s.topology.summary().c_str());
-  std::printf("colouring: %zu vertices from the views, %zu completed, %zu unreachable\n", s.colouring.confident,
-              s.colouring.completed, s.colouring.unreachable);
+  std::printf("colouring: %zu vertices from the views, %zu completed, %zu unreachable\n", s.coloring.confident,
+              s.coloring.completed, s.coloring.unreachable);
   const std::array<float, 4>& iou = s.silhouette_iou;
   std::printf("silhouette IoU: front %.4f, right %.4f, back %.4f, left %.4f\n", iou[0], iou[1], iou[2], iou[3]);
   std::printf("time:");
@@ -114,7 +114,7 @@ const CommandRegistration registration{
       sub.add_option("--subdivide", o.cleanup.subdivision_iterations, "Loop subdivision iterations before colouring")
           ->capture_default_str()
           ->check(CLI::Range(0, 4));
-      sub.add_option("--visibility-resolution", o.colouring.target.raster_resolution,
+      sub.add_option("--visibility-resolution", o.coloring.target.raster_resolution,
                      "Raster resolution of the colouring visibility test")
           ->capture_default_str()
           ->check(CLI::Range(16, 8192));

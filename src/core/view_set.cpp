@@ -161,15 +161,15 @@ ViewSet make_view_set(std::array<Image, 4> rgb, std::array<Image, 4> normal_maps
                 "); are they in the other space (see --normal-space)?");
     set.views[i].normals = std::move(normals);
 
-    Image colour = to_rgba(rgb[i]);
+    Image color = to_rgba(rgb[i]);
     if (!rgb_has_alpha) {
       Image m(nres, nres, 1);
       m.data = mask;
-      Image r = resize_image(m, colour.width, colour.height);
-      for (size_t p = 0; p < colour.pixel_count(); ++p) colour.data[p * 4 + 3] = is_foreground(r.data[p]) ? 1.f : 0.f;
+      Image r = resize_image(m, color.width, color.height);
+      for (size_t p = 0; p < color.pixel_count(); ++p) color.data[p * 4 + 3] = is_foreground(r.data[p]) ? 1.f : 0.f;
     }
-    check_mask_coverage(colour, rgb_names[i]);
-    set.views[i].rgb = std::move(colour);
+    check_mask_coverage(color, rgb_names[i]);
+    set.views[i].rgb = std::move(color);
   }
   return set;
 }

@@ -69,7 +69,7 @@ size_t type_size(PlyType type) {
 }
 
 // Integer colour channels span the whole type range; float ones are already in [0, 1].
-float colour_scale(PlyType type) {
+float color_scale(PlyType type) {
   switch (type) {
     case PlyType::Int8: return 1.f / 127.f;
     case PlyType::UInt8: return 1.f / 255.f;
@@ -237,7 +237,7 @@ void read_vertices(PlyBodyReader& body, const PlyElement& element, Mesh& mesh, c
       double value = body.next(p.type);
       if (slot < 3) mesh.positions[v][slot] = float(value);
       else if (slot < 6) {
-        if (has_colors) mesh.colors[v][slot - 3] = float(value) * colour_scale(p.type);
+        if (has_colors) mesh.colors[v][slot - 3] = float(value) * color_scale(p.type);
       } else if (has_uvs) {
         mesh.uvs[v][slot - 6] = float(value);
       }

@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "core/error.h"
-#include "isomer/colour_completion.h"
+#include "isomer/color_completion.h"
 #include "render/rasterizer.h"
 
 namespace u3d {
@@ -48,7 +48,7 @@ Image eroded_mask_copy(const Image& rgba, int radius) {
 }  // namespace
 
 std::vector<uint8_t> visible_vertices(const Mesh& mesh, const std::vector<Vec3f>& face_normals, View v,
-                                      const ColourTargetOptions& options) {
+                                      const ColorTargetOptions& options) {
   const Camera cam = view_camera(v, options.raster_resolution);
   const RasterBuffer buf = rasterize(mesh, cam);
   std::vector<uint8_t> face_seen(mesh.faces.size(), 0);
@@ -63,7 +63,7 @@ std::vector<uint8_t> visible_vertices(const Mesh& mesh, const std::vector<Vec3f>
 }
 
 ExplicitTarget compute_explicit_target(const Mesh& mesh, const std::array<const Image*, 4>& images,
-                                       const ColourTargetOptions& options) {
+                                       const ColorTargetOptions& options) {
   require(options.raster_resolution >= 16, "ExplicitTarget: raster resolution must be at least 16");
   require(options.cos_power >= 0, "ExplicitTarget: cos power must not be negative");
   const size_t n = mesh.positions.size();
@@ -96,7 +96,7 @@ ExplicitTarget compute_explicit_target(const Mesh& mesh, const std::array<const 
   return target;
 }
 
-ColouringReport colour_mesh(Mesh& mesh, const ViewSet& views, const ColouringOptions& options) {
+ColoringReport color_mesh(Mesh& mesh, const ViewSet& views, const ColoringOptions& options) {
   std::array<Image, 4> eroded;
   std::array<const Image*, 4> images;
   for (View v : kAllViews) {
@@ -106,20 +106,20 @@ ColouringReport colour_mesh(Mesh& mesh, const ViewSet& views, const ColouringOpt
   const ExplicitTarget target = compute_explicit_target(mesh, images, options.target);
   const float t = options.confidence_threshold;
   const size_t n = mesh.positions.size();
-  mesh.colors.assign(n, options.fallback_colour);
+  mesh.colors.assign(n, options.fallback_color);
   std::vector<uint8_t> known(n, 0);
-  ColouringReport report;
+  ColoringReport report;
   for (size_t v = 0; v < n; ++v) {
     const float w = target.weight[v];
     if (w > t) {
       mesh.colors[v] = target.mean(v);
     } else if (t > 0) {  // official "smooth": fade from the fallback toward the few samples there are
-      mesh.colors[v] = (options.fallback_colour * (t - w) + target.weighted_sum[v]) / t;
+      mesh.colors[v] = (options.fallback_color * (t - w) + target.weighted_sum[v]) / t;
     }
     known[v] = w >= t && w > 0;
     report.confident += known[v];
   }
-  const ColourCompletionReport completion = complete_vertex_colours(mesh.faces, mesh.colors, known);
+  const ColorCompletionReport completion = complete_vertex_colors(mesh.faces, mesh.colors, known);
   report.completed = completion.filled;
   report.unreachable = completion.unreachable;
   for (Vec3f& c : mesh.colors) c = c.cwiseMax(0.f).cwiseMin(1.f);

@@ -23,7 +23,7 @@ namespace u3d {
 
 // Named apart from explicit_target_normals.h's ExplicitTargetOptions: one name for two structs would
 // break the one-definition rule inside u3d_isomer.
-struct ColourTargetOptions {
+struct ColorTargetOptions {
   std::array<float, 4> view_weights{2.0f, 0.2f, 1.0f, 0.2f};  // front, right, back, left (official colouring)
   int cos_power = 2;
   float facing_epsilon = 0.05f;
@@ -39,27 +39,27 @@ struct ExplicitTarget {
 
 // Vertices of `mesh` visible in view v by the rule above (nonzero = visible).
 std::vector<uint8_t> visible_vertices(const Mesh& mesh, const std::vector<Vec3f>& face_normals, View v,
-                                      const ColourTargetOptions& options);
+                                      const ColorTargetOptions& options);
 
 // images[i]: RGBA view images (any square resolution), indexed by int(View).
 ExplicitTarget compute_explicit_target(const Mesh& mesh, const std::array<const Image*, 4>& images,
-                                       const ColourTargetOptions& options = {});
+                                       const ColorTargetOptions& options = {});
 
 // Final colouring (official: threshold 0.2, "smooth" below it, then completion of the rest).
-struct ColouringOptions {
-  ColourTargetOptions target;
+struct ColoringOptions {
+  ColorTargetOptions target;
   float confidence_threshold = 0.2f;  // vertices with less total weight are filled by completion
   int mask_erosion_px = 1;            // official erodes the colour masks by 1 px (3x3)
-  Vec3f fallback_colour{0.5f, 0.5f, 0.5f};  // only for parts no colour can reach
+  Vec3f fallback_color{0.5f, 0.5f, 0.5f};  // only for parts no colour can reach
 };
 
-struct ColouringReport {
+struct ColoringReport {
   size_t confident = 0;    // vertices coloured from the views
   size_t completed = 0;    // vertices coloured by completion
   size_t unreachable = 0;  // vertices left with the (blended) fallback colour
 };
 
 // Sets mesh.colors (sRGB) from the views' RGB images.
-ColouringReport colour_mesh(Mesh& mesh, const ViewSet& views, const ColouringOptions& options = {});
+ColoringReport color_mesh(Mesh& mesh, const ViewSet& views, const ColoringOptions& options = {});
 
 }  // namespace u3d

@@ -46,7 +46,7 @@ ReconstructResult reconstruct(const ViewSet& views, const ReconstructOptions& op
       });
   }
   timed("smooth and subdivide", [&] { mesh = smooth_and_subdivide(mesh, options.cleanup); });
-  timed("colouring", [&] { result.colouring = colour_mesh(mesh, views, options.colouring); });
+  timed("colouring", [&] { result.coloring = color_mesh(mesh, views, options.coloring); });
   mesh.validate("reconstructed mesh");
   result.mesh = std::move(mesh);
   return result;

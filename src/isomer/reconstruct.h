@@ -39,7 +39,7 @@ struct ReconstructOptions {
   CoarseStageOptions coarse;  // with sphere_init, CoarseStageOptions::from_sphere() is the official schedule
   RefineStageOptions refine;  // refine.use_explicit_target = false: plain multi-view normal loss
   SurfaceCleanupOptions cleanup;
-  ColouringOptions colouring;
+  ColoringOptions coloring;
 };
 
 struct StageTiming {
@@ -51,7 +51,7 @@ struct ReconstructResult {
   Mesh mesh;
   std::vector<StageTiming> timings;
   StageReport coarse, refine;  // the optimisation stages' loss and time profile (when they ran)
-  ColouringReport colouring;
+  ColoringReport coloring;
 };
 
 // Stage 1: the initial mesh, the sphere or the visual hull, as the options choose.

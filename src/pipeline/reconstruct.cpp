@@ -48,7 +48,7 @@ ReconstructSummary reconstruct_folder(const ReconstructRequest& request, Progres
   ReconstructResult result = reconstruct(views, request.options);
   summary.timings.insert(summary.timings.end(), result.timings.begin(), result.timings.end());
   summary.mesh = std::move(result.mesh);
-  summary.colouring = result.colouring;
+  summary.coloring = result.coloring;
   summary.topology = mesh_topology(summary.mesh);
   summary.silhouette_iou = silhouette_iou(summary.mesh, views);
 

@@ -29,7 +29,7 @@ struct ReconstructRequest {
 struct ReconstructSummary {
   Mesh mesh;  // as reconstructed, in the views' frame (the file may be scaled)
   MeshTopology topology;
-  ColouringReport colouring;
+  ColoringReport coloring;
   std::array<float, 4> silhouette_iou{};  // per view, against the input masks
   std::vector<StageTiming> timings;       // "load", ISOMER's stages, "write", "previews" (if written)
   std::vector<std::filesystem::path> written;

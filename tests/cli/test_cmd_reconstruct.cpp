@@ -31,7 +31,7 @@ CliResult run_cli(const std::string& args, const std::filesystem::path& log) {
   return r;
 }
 
-TEST(ReconstructCli, SphereGivesClosedColouredMeshMatchingTheSilhouettes) {
+TEST(ReconstructCli, SphereGivesClosedColoredMeshMatchingTheSilhouettes) {
   const auto dir = testing::fresh_temp_dir("cli_sphere");
   testing::write_view_set(testing::sphere_views(0.6f, 192), dir / "views");
   const auto out = dir / "sphere.glb";

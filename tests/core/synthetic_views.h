@@ -11,7 +11,7 @@ namespace u3d::testing {
 
 // colour(view, world normal) gives the RGB of a foreground pixel.
 inline ViewSet sphere_views(float radius, int resolution,
-                            const std::function<Vec3f(View, const Vec3f&)>& colour = nullptr) {
+                            const std::function<Vec3f(View, const Vec3f&)>& color = nullptr) {
   std::array<Image, 4> rgb, normal_maps;
   std::array<std::string, 4> rgb_names, normal_names;
   for (View v : kAllViews) {
@@ -25,7 +25,7 @@ inline ViewSet sphere_views(float radius, int resolution,
         const float r2 = cx * cx + cy * cy;
         if (r2 >= radius * radius) continue;
         const Vec3f world = camera_to_world * Vec3f(cx, cy, std::sqrt(radius * radius - r2)) / radius;
-        const Vec3f col = colour ? colour(v, world) : Vec3f(0.8f, 0.5f, 0.2f);
+        const Vec3f col = color ? color(v, world) : Vec3f(0.8f, 0.5f, 0.2f);
         for (int i = 0; i < 3; ++i) {
           n.at(x, y, i) = 0.5f * (world[i] + 1.f);
           c.at(x, y, i) = col[i];

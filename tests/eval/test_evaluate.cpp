@@ -78,7 +78,7 @@ TEST(Evaluate, SharedFrameCanPlaceTheGtLikeTheRenderer) {
   EXPECT_THROW(evaluate_meshes(pred, gt, o), Error);
 }
 
-TEST(Evaluate, OpenAndColourlessMeshesAreWarnedAbout) {
+TEST(Evaluate, OpenAndColorlessMeshesAreWarnedAbout) {
   set_progress_quiet(true);
   Mesh gt = colored_sphere(), pred = test::sphere_mesh(0.5f, 2);
   pred.faces.resize(pred.faces.size() - 10);

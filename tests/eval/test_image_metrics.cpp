@@ -75,7 +75,7 @@ TEST(Appearance, IdenticalMeshesScorePerfectly) {
   EXPECT_NEAR(a.ssim, 1.0, 1e-9);
 }
 
-TEST(Appearance, DifferentColourIsPenalised) {
+TEST(Appearance, DifferentColorIsPenalised) {
   Mesh red = colored_sphere({1, 0, 0}), white = colored_sphere({1, 1, 1});
   AppearanceMetrics a = appearance_metrics(red, white, {64, 1});
   // Sphere of radius 0.5 in a view of half width 0.51 covers pi/4 * (0.5/0.51)^2 of the image, where

@@ -40,7 +40,7 @@ inline size_t file_count(const std::filesystem::path& dir) {
 
 // Closed tetrahedron with outward counter-clockwise faces and distinct vertex colours whose
 // channels are multiples of 1/255 (so 8-bit formats keep them exactly).
-inline Mesh coloured_tetrahedron() {
+inline Mesh colored_tetrahedron() {
   Mesh m;
   m.positions = {{0.f, 0.f, 0.f}, {1.f, 0.f, 0.f}, {0.f, 1.f, 0.f}, {0.f, 0.f, 1.f}};
   m.faces = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};

@@ -14,9 +14,9 @@ namespace fs = std::filesystem;
 using namespace u3d;
 using namespace u3d::test;
 
-TEST(Glb, ColouredRoundTripConvertsColoursThroughLinearAndBack) {
+TEST(Glb, ColoredRoundTripConvertsColorsThroughLinearAndBack) {
   fs::path dir = scratch_dir();
-  Mesh mesh = coloured_tetrahedron();
+  Mesh mesh = colored_tetrahedron();
   write_mesh(mesh, dir / "tet.glb");
   std::string bytes = read_file(dir / "tet.glb");
   ASSERT_GE(bytes.size(), 20u);
@@ -29,9 +29,9 @@ TEST(Glb, ColouredRoundTripConvertsColoursThroughLinearAndBack) {
 }
 
 // The file must hold LINEAR colours: read the COLOR_0 accessor directly, bypassing our reader.
-TEST(Glb, StoresLinearVertexColoursAndFlippedUvs) {
+TEST(Glb, StoresLinearVertexColorsAndFlippedUvs) {
   fs::path dir = scratch_dir();
-  Mesh mesh = coloured_tetrahedron();
+  Mesh mesh = colored_tetrahedron();
   mesh.uvs = {{0.f, 0.f}, {1.f, 0.25f}, {0.f, 1.f}, {0.5f, 0.5f}};
   write_mesh(mesh, dir / "tet.glb");
   tinygltf::TinyGLTF loader;

@@ -27,8 +27,8 @@ TEST(GltfValidator, WrittenGlbFilesHaveNoErrors) {
   if (!have_node()) GTEST_SKIP() << "node is not installed: cannot run the Khronos glTF validator";
   fs::path dir = scratch_dir();
 
-  Mesh coloured = coloured_tetrahedron();
-  write_mesh(coloured, dir / "coloured.glb");
+  Mesh colored = colored_tetrahedron();
+  write_mesh(colored, dir / "coloured.glb");
   EXPECT_EQ(validate(dir / "coloured.glb"), 0);
 
   write_mesh(two_material_quads(), dir / "textured.glb");
@@ -60,7 +60,7 @@ TEST(GltfValidator, WrittenGlbFilesHaveNoErrors) {
 TEST(GltfValidator, RejectsABrokenFile) {
   if (!have_node()) GTEST_SKIP() << "node is not installed: cannot run the Khronos glTF validator";
   fs::path dir = scratch_dir();
-  write_mesh(coloured_tetrahedron(), dir / "good.glb");
+  write_mesh(colored_tetrahedron(), dir / "good.glb");
   std::string bytes = read_file(dir / "good.glb");
   write_file(dir / "broken.glb", bytes.substr(0, bytes.size() - 16));
   EXPECT_NE(validate(dir / "broken.glb"), 0);

@@ -30,22 +30,22 @@ TEST(MeshIo, MissingFileAndUnknownExtension) {
     expect_error_containing([&] { read_mesh(dir / name); }, "mesh file not found: " + (dir / name).string());
   write_file(dir / "mesh.stl", "solid x\nendsolid x\n");
   expect_error_containing([&] { read_mesh(dir / "mesh.stl"); }, "unsupported mesh file extension '.stl'");
-  expect_error_containing([&] { write_mesh(coloured_tetrahedron(), dir / "out.stl"); }, "unsupported output mesh extension");
-  expect_error_containing([&] { write_mesh(coloured_tetrahedron(), dir / "out.gltf"); }, "use .glb");
+  expect_error_containing([&] { write_mesh(colored_tetrahedron(), dir / "out.stl"); }, "unsupported output mesh extension");
+  expect_error_containing([&] { write_mesh(colored_tetrahedron(), dir / "out.gltf"); }, "use .glb");
   expect_error_containing([&] { read_mesh(dir); }, "expected a mesh file");
 }
 
 TEST(MeshIo, UppercaseExtensionsWork) {
   fs::path dir = scratch_dir();
-  write_mesh(coloured_tetrahedron(), dir / "UPPER.PLY");
+  write_mesh(colored_tetrahedron(), dir / "UPPER.PLY");
   EXPECT_EQ(read_mesh(dir / "UPPER.PLY").vertex_count(), 4u);
 }
 
 TEST(MeshIo, InvalidMeshesAreNotWritten) {
   fs::path dir = scratch_dir();
-  Mesh nan_mesh = coloured_tetrahedron();
+  Mesh nan_mesh = colored_tetrahedron();
   nan_mesh.positions[2].y() = std::numeric_limits<float>::quiet_NaN();
-  Mesh bad_index = coloured_tetrahedron();
+  Mesh bad_index = colored_tetrahedron();
   bad_index.faces[0][1] = 7;
   for (const char* ext : {".glb", ".obj", ".ply"}) {
     expect_error_containing([&] { write_mesh(Mesh{}, dir / (std::string("empty") + ext)); }, "no vertices");

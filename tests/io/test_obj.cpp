@@ -8,9 +8,9 @@ namespace fs = std::filesystem;
 using namespace u3d;
 using namespace u3d::test;
 
-TEST(Obj, ColouredMeshRoundTripIsExact) {
+TEST(Obj, ColoredMeshRoundTripIsExact) {
   fs::path dir = scratch_dir();
-  Mesh mesh = coloured_tetrahedron();
+  Mesh mesh = colored_tetrahedron();
   mesh.positions[1] = Vec3f(0.1f, -1e-7f, 3.14159265f);  // needs all float digits
   mesh.colors[2] = Vec3f(0.123456789f, 0.5f, 1.f / 3.f);
   write_mesh(mesh, dir / "tet.obj");
@@ -41,7 +41,7 @@ TEST(Obj, TwoTexturedMaterialsRoundTrip) {
   }
 }
 
-TEST(Obj, ReadsPolygonsNegativeIndicesSeamsAndVertexColours) {
+TEST(Obj, ReadsPolygonsNegativeIndicesSeamsAndVertexColors) {
   fs::path dir = scratch_dir();
   save_image(gradient_texture(4, 4, 3, 7), dir / "wood.png");
   save_image(gradient_texture(2, 2, 3, 9), dir / "metal tex.png");

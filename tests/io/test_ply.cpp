@@ -10,9 +10,9 @@ namespace fs = std::filesystem;
 using namespace u3d;
 using namespace u3d::test;
 
-TEST(Ply, BinaryRoundTripKeepsPositionsFacesColoursUvsAndTexture) {
+TEST(Ply, BinaryRoundTripKeepsPositionsFacesColorsUvsAndTexture) {
   fs::path dir = scratch_dir();
-  Mesh mesh = coloured_tetrahedron();
+  Mesh mesh = colored_tetrahedron();
   mesh.uvs = {{0.f, 0.f}, {1.f, 0.f}, {0.f, 1.f}, {0.3f, 0.7f}};
   mesh.materials.push_back(Material{"tex", Vec4f::Ones(), gradient_texture(5, 3, 4, 3)});
   write_mesh(mesh, dir / "tet.ply");
@@ -26,7 +26,7 @@ TEST(Ply, BinaryRoundTripKeepsPositionsFacesColoursUvsAndTexture) {
   expect_same_image(mesh.materials[0].texture, back.materials[0].texture, 1e-6f);
 }
 
-TEST(Ply, ReadsAsciiWithFloatColoursPolygonsAndExtraElements) {
+TEST(Ply, ReadsAsciiWithFloatColorsPolygonsAndExtraElements) {
   fs::path dir = scratch_dir();
   write_file(dir / "quad.ply",
              "ply\r\nformat ascii 1.0\ncomment a quad\n"
@@ -47,7 +47,7 @@ TEST(Ply, ReadsAsciiWithFloatColoursPolygonsAndExtraElements) {
   EXPECT_TRUE(mesh.uvs.empty());
 }
 
-TEST(Ply, ReadsBigEndianBinaryWithUcharColours) {
+TEST(Ply, ReadsBigEndianBinaryWithUcharColors) {
   fs::path dir = scratch_dir();
   std::string data =
       "ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
@@ -78,7 +78,7 @@ TEST(Ply, ReadsBigEndianBinaryWithUcharColours) {
 
 TEST(Ply, CorruptAndTruncatedFilesGiveErrors) {
   fs::path dir = scratch_dir();
-  write_mesh(coloured_tetrahedron(), dir / "good.ply");
+  write_mesh(colored_tetrahedron(), dir / "good.ply");
   std::string good = read_file(dir / "good.ply");
   write_file(dir / "truncated.ply", good.substr(0, good.size() - 7));
   write_file(dir / "noheader.ply", good.substr(0, 40));

@@ -37,7 +37,7 @@ void check_every_prefix(const fs::path& dir, const std::string& name, const Mesh
 
 TEST(Truncation, EveryPrefixIsReadOrRejectedWithError) {
   fs::path dir = scratch_dir();
-  Mesh mesh = coloured_tetrahedron();
+  Mesh mesh = colored_tetrahedron();
   mesh.uvs = {{0.f, 0.f}, {1.f, 0.f}, {0.f, 1.f}, {0.5f, 0.5f}};
   check_every_prefix(dir, "tet.ply", mesh);
   check_every_prefix(dir, "tet.glb", mesh);

@@ -15,7 +15,7 @@
 namespace u3d {
 namespace {
 
-TEST(BundledExample, SpotReconstructsClosedColouredAndOnTheSilhouettes) {
+TEST(BundledExample, SpotReconstructsClosedColoredAndOnTheSilhouettes) {
   set_progress_quiet(true);
   const ViewSet views = load_view_set(std::filesystem::path(UNIQUE3D_SOURCE_DIR) / "examples/spot/views");
   ReconstructOptions options;
@@ -29,7 +29,7 @@ TEST(BundledExample, SpotReconstructsClosedColouredAndOnTheSilhouettes) {
   EXPECT_GT(topo.volume, 0.0);
   ASSERT_EQ(mesh.colors.size(), mesh.positions.size());
   for (const Vec3f& c : mesh.colors) ASSERT_TRUE(c.allFinite() && c.minCoeff() >= 0.f && c.maxCoeff() <= 1.f);
-  EXPECT_EQ(result.colouring.unreachable, 0u);
+  EXPECT_EQ(result.coloring.unreachable, 0u);
   const std::array<float, 4> iou = silhouette_iou(mesh, views);
   std::printf("spot: %zu faces, %s\nspot silhouette IoU: front %.4f right %.4f back %.4f left %.4f\n",
               mesh.face_count(), topo.summary().c_str(), iou[0], iou[1], iou[2], iou[3]);

@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "isomer/colour_completion.h"
+#include "isomer/color_completion.h"
 #include "isomer/explicit_target.h"
 #include "core/synthetic_views.h"
 
@@ -37,7 +37,7 @@ TEST(ExplicitTarget, WeightsMatchHandComputedCase) {
   ASSERT_NEAR(face_normals(mesh.positions, mesh.faces)[0].dot(Vec3f(std::sin(angle), 0, std::cos(angle))), 1.f, 1e-5f);
   const Image front = constant_rgba(64, {1, 0, 0}, 1.f), right = constant_rgba(64, {0, 1, 0}, 0.5f);
   const Image back = constant_rgba(64, {0, 0, 1}, 1.f), left = constant_rgba(64, {0, 0, 1}, 1.f);
-  ColourTargetOptions options;
+  ColorTargetOptions options;
   options.raster_resolution = 64;
   const ExplicitTarget t = compute_explicit_target(mesh, {&front, &right, &back, &left}, options);
   // front: 2.0 * 0.75 * 1 = 1.5; right: 0.2 * 0.25 * 0.5 = 0.025; back and left: not visible.
@@ -58,7 +58,7 @@ TEST(ExplicitTarget, WeightsMatchHandComputedCase) {
 TEST(ExplicitTarget, FacesTurnedAwayAreNotVisible) {
   const Mesh mesh = tilted_square(float(M_PI) / 6.f);
   const std::vector<Vec3f> fn = face_normals(mesh.positions, mesh.faces);
-  ColourTargetOptions options;
+  ColorTargetOptions options;
   options.raster_resolution = 64;
   EXPECT_EQ(visible_vertices(mesh, fn, View::Front, options), std::vector<uint8_t>(4, 1));
   EXPECT_EQ(visible_vertices(mesh, fn, View::Back, options), std::vector<uint8_t>(4, 0));
@@ -80,45 +80,45 @@ Mesh strip(int cols) {
   return m;
 }
 
-TEST(ColourCompletion, FillsEverythingWithoutSeamsOrNaN) {
+TEST(ColorCompletion, FillsEverythingWithoutSeamsOrNaN) {
   const int cols = 20;
   Mesh m = strip(cols);
-  std::vector<Vec3f> colours(m.positions.size(), Vec3f(0, 0, 0));
+  std::vector<Vec3f> colors(m.positions.size(), Vec3f(0, 0, 0));
   std::vector<uint8_t> known(m.positions.size(), 0);
   for (int k = 0; k < 2; ++k) {  // red at the left end, blue at the right end
-    colours[k] = Vec3f(1, 0, 0), known[k] = 1;
-    colours[2 * cols + k] = Vec3f(0, 0, 1), known[2 * cols + k] = 1;
+    colors[k] = Vec3f(1, 0, 0), known[k] = 1;
+    colors[2 * cols + k] = Vec3f(0, 0, 1), known[2 * cols + k] = 1;
   }
-  const ColourCompletionReport r = complete_vertex_colours(m.faces, colours, known);
+  const ColorCompletionReport r = complete_vertex_colors(m.faces, colors, known);
   EXPECT_EQ(r.unreachable, 0u);
   EXPECT_EQ(r.filled, m.positions.size() - 4);
   EXPECT_GT(r.growth_rounds, 0);
   EXPECT_EQ(r.smoothing_rounds, r.growth_rounds);
   float biggest_step = 0.f;
   for (int c = 0; c < cols; ++c) {
-    for (int k = 0; k < 2; ++k) ASSERT_TRUE(colours[2 * c + k].allFinite());
-    biggest_step = std::max(biggest_step, (colours[2 * c + 2] - colours[2 * c]).norm());
+    for (int k = 0; k < 2; ++k) ASSERT_TRUE(colors[2 * c + k].allFinite());
+    biggest_step = std::max(biggest_step, (colors[2 * c + 2] - colors[2 * c]).norm());
   }
   // Stopping when the two fronts meet would leave a red|blue jump of length sqrt(2) in the middle.
   EXPECT_LT(biggest_step, 0.5f);
-  EXPECT_EQ(colours[0], Vec3f(1, 0, 0));  // known colours never change
+  EXPECT_EQ(colors[0], Vec3f(1, 0, 0));  // known colours never change
 }
 
-TEST(ColourCompletion, UnreachablePartsKeepTheirFallback) {
+TEST(ColorCompletion, UnreachablePartsKeepTheirFallback) {
   Mesh m = strip(2);
   const int offset = int(m.positions.size());
   for (int k = 0; k < 3; ++k) m.positions.push_back(Vec3f(10.f + k, 0, 0));
   m.faces.push_back({offset, offset + 1, offset + 2});  // an island nobody saw
-  std::vector<Vec3f> colours(m.positions.size(), Vec3f(0.5f, 0.5f, 0.5f));
+  std::vector<Vec3f> colors(m.positions.size(), Vec3f(0.5f, 0.5f, 0.5f));
   std::vector<uint8_t> known(m.positions.size(), 0);
-  colours[0] = Vec3f(1, 1, 0), known[0] = 1;
-  const ColourCompletionReport r = complete_vertex_colours(m.faces, colours, known);
+  colors[0] = Vec3f(1, 1, 0), known[0] = 1;
+  const ColorCompletionReport r = complete_vertex_colors(m.faces, colors, known);
   EXPECT_EQ(r.unreachable, 3u);
-  for (int k = 0; k < 3; ++k) EXPECT_EQ(colours[offset + k], Vec3f(0.5f, 0.5f, 0.5f));
-  for (int v = 1; v < offset; ++v) EXPECT_TRUE(colours[v].isApprox(Vec3f(1, 1, 0)));
+  for (int k = 0; k < 3; ++k) EXPECT_EQ(colors[offset + k], Vec3f(0.5f, 0.5f, 0.5f));
+  for (int v = 1; v < offset; ++v) EXPECT_TRUE(colors[v].isApprox(Vec3f(1, 1, 0)));
 }
 
-TEST(Colouring, SphereGetsEveryVertexColouredFromItsViews) {
+TEST(Coloring, SphereGetsEveryVertexColoredFromItsViews) {
   // Each view paints its own colour: vertices facing a view take (mostly) that view's colour.
   const std::array<Vec3f, 4> paint = {Vec3f(1, 0, 0), Vec3f(0, 1, 0), Vec3f(0, 0, 1), Vec3f(1, 1, 0)};
   const ViewSet views = testing::sphere_views(0.6f, 128, [&](View v, const Vec3f&) { return paint[size_t(v)]; });
@@ -134,9 +134,9 @@ TEST(Colouring, SphereGetsEveryVertexColouredFromItsViews) {
       mesh.faces.push_back({a, a + 1, b});
       mesh.faces.push_back({b, a + 1, b + 1});
     }
-  ColouringOptions options;
+  ColoringOptions options;
   options.target.raster_resolution = 256;
-  const ColouringReport report = colour_mesh(mesh, views, options);
+  const ColoringReport report = color_mesh(mesh, views, options);
   ASSERT_EQ(mesh.colors.size(), mesh.positions.size());
   for (const Vec3f& c : mesh.colors) ASSERT_TRUE(c.allFinite());
   EXPECT_GT(report.confident, mesh.positions.size() / 2);

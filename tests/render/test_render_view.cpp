@@ -51,7 +51,7 @@ TEST(RenderView, AsymmetricMeshShowsBumpsOnTheExpectedSides) {
   }
 }
 
-TEST(RenderView, NormalColoursInWorldAndCameraSpace) {
+TEST(RenderView, NormalColorsInWorldAndCameraSpace) {
   Mesh mesh = test::bumpy_cube();
   // The cube side facing each camera, seen at image point (0.3, -0.3) (away from the bumps).
   const std::pair<View, Vec3f> cases[] = {{View::Front, {0, 0, 1}},
@@ -138,7 +138,7 @@ TEST(RenderView, TexturesAppearUprightWithUvOriginBottomLeft) {
   EXPECT_NEAR(centre[2], 0.5f, 0.02f);
 }
 
-TEST(RenderView, BaseColourAndPerFaceMaterials) {
+TEST(RenderView, BaseColorAndPerFaceMaterials) {
   Mesh mesh = textured_square();
   mesh.materials[0].base_color = Vec4f(0.5f, 1.f, 1.f, 1.f);
   Material blue;
@@ -150,7 +150,7 @@ TEST(RenderView, BaseColourAndPerFaceMaterials) {
   EXPECT_TRUE(rgba_at(r.rgb, -0.9f, 0.9f).isApprox(Vec4f(0, 0, 1, 1)));
 }
 
-TEST(RenderView, VertexColoursAreInterpolated) {
+TEST(RenderView, VertexColorsAreInterpolated) {
   Mesh mesh;
   mesh.positions = {{-1, -1, 0}, {1, -1, 0}, {-1, 1, 0}};
   mesh.faces = {{0, 1, 2}};

@@ -15,7 +15,7 @@
 
 namespace u3d {
 
-struct ColourCompletionReport {
+struct ColorCompletionReport {
   int growth_rounds = 0;      // rounds until the coloured set stopped growing
   int smoothing_rounds = 0;   // extra rounds after that
   size_t filled = 0;          // unknown vertices that received a colour
@@ -24,7 +24,7 @@ struct ColourCompletionReport {
 
 // colours: per vertex; entries of unknown vertices are used only if they stay unreachable (give a
 // neutral fallback there). known: nonzero = fixed colour.
-ColourCompletionReport complete_vertex_colours(const std::vector<Vec3i>& faces, std::vector<Vec3f>& colours,
+ColorCompletionReport complete_vertex_colors(const std::vector<Vec3i>& faces, std::vector<Vec3f>& colors,
                                                const std::vector<uint8_t>& known, int max_rounds = 10000);
 
 }  // namespace u3d
