@@ -1,4 +1,4 @@
-#include "nn/attention.h"
+#include "nn/layers/attention.h"
 
 #include <gtest/gtest.h>
 

@@ -3,8 +3,8 @@
 #include <gtest/gtest.h>
 
 #include "golden.h"
-#include "nn/pil_resize.h"
-#include "nn/unet.h"
+#include "nn/models/unet.h"
+#include "nn/preprocess/pil_resize.h"
 
 namespace u3d::nn {
 namespace {
