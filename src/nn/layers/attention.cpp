@@ -1,6 +1,8 @@
 #include "nn/layers/attention.h"
 
 #include <algorithm>
+#include <cmath>
+#include <utility>
 
 namespace u3d::nn {
 
@@ -46,6 +48,11 @@ torch::Tensor multi_head_attention(const torch::Tensor& q, const torch::Tensor& 
   return merge_heads(out, heads);
 }
 
+torch::Tensor PlainAttentionProcessor::process(AttentionImpl& attention, const torch::Tensor& x,
+                                               const torch::Tensor& context) {
+  return attention.attend(x, context.defined() ? context : x);
+}
+
 AttentionImpl::AttentionImpl(const AttentionOptions& o, const torch::TensorOptions& t) : options(o) {
   const int64_t inner = o.heads * o.dim_head;
   const int64_t kv_dim = o.cross_attention_dim > 0 ? o.cross_attention_dim : o.query_dim;
@@ -56,9 +63,10 @@ AttentionImpl::AttentionImpl(const AttentionOptions& o, const torch::TensorOptio
   to_v = register_module("to_v", Linear(kv_dim, inner, o.qkv_bias, t));
   out_proj = Linear(inner, o.query_dim, true, t);
   to_out = register_module("to_out", torch::nn::ModuleList(out_proj));
+  processor = register_module("processor", std::make_shared<PlainAttentionProcessor>());
 }
 
-torch::Tensor AttentionImpl::forward(const torch::Tensor& hidden, const torch::Tensor& context, int64_t views) {
+torch::Tensor AttentionImpl::forward(const torch::Tensor& hidden, const torch::Tensor& context) {
   torch::Tensor x = hidden;
   const bool spatial = x.dim() == 4;
   int64_t b = 0, c = 0, h = 0, w = 0;
@@ -69,22 +77,41 @@ torch::Tensor AttentionImpl::forward(const torch::Tensor& hidden, const torch::T
   const torch::Tensor residual = x;
   if (group_norm) x = group_norm->forward(x.transpose(1, 2)).transpose(1, 2);
 
-  const int64_t n = x.size(0), l = x.size(1);
-  const bool joint_views = views > 1 && !context.defined();
-  if (joint_views) {
-    TORCH_CHECK(n % views == 0, "multi-view attention: batch ", n, " is not a multiple of ", views, " views");
-    x = x.reshape({n / views, views * l, x.size(2)});
-  }
-  const torch::Tensor& kv = context.defined() ? context : x;
-  const double scale = 1.0 / std::sqrt(static_cast<double>(options.dim_head));
-  torch::Tensor out =
-      multi_head_attention(to_q->forward(x), to_k->forward(kv), to_v->forward(kv), options.heads, scale);
-  out = out_proj->forward(out);
-  if (joint_views) out = out.reshape({n, l, out.size(2)});
+  torch::Tensor out = processor->process(*this, x, context);
 
   if (options.residual_connection) out = out + residual;
   if (spatial) out = out.transpose(1, 2).reshape({b, c, h, w});
   return out;
+}
+
+torch::Tensor AttentionImpl::attend(const torch::Tensor& x, const torch::Tensor& kv) {
+  const double scale = 1.0 / std::sqrt(static_cast<double>(options.dim_head));
+  return out_proj->forward(
+      multi_head_attention(to_q->forward(x), to_k->forward(kv), to_v->forward(kv), options.heads, scale));
+}
+
+void AttentionImpl::set_processor(std::shared_ptr<AttentionProcessor> p) {
+  TORCH_CHECK(p, "Attention: the processor must not be null");
+  processor = replace_module("processor", std::move(p));
+}
+
+size_t set_attention_processors(torch::nn::Module& model, const AttentionProcessorChooser& choose) {
+  size_t changed = 0;
+  for (const auto& item : model.named_modules("", /*include_self=*/false)) {
+    auto* attention = dynamic_cast<AttentionImpl*>(item.value().get());
+    if (!attention) continue;
+    if (auto p = choose(item.key(), *attention)) {
+      attention->set_processor(std::move(p));
+      ++changed;
+    }
+  }
+  return changed;
+}
+
+AttentionProcessorChooser self_attention_only(std::shared_ptr<AttentionProcessor> processor) {
+  return [processor = std::move(processor)](const std::string& name, const AttentionImpl&) {
+    return name == "attn1" || name.ends_with(".attn1") ? processor : nullptr;
+  };
 }
 
 }  // namespace u3d::nn

@@ -1,7 +1,28 @@
 #pragma once
-// Multi-head attention: the shared softmax(q·kᵀ·scale)·v kernel and diffusers' `Attention` module
-// (to_q / to_k / to_v / to_out.0, optionally with its own GroupNorm and residual as in the VAE).
+// Multi-head attention: the shared softmax(q·kᵀ·scale)·v kernel, diffusers' `Attention` module
+// (to_q / to_k / to_v / to_out.0, optionally with its own GroupNorm and residual as in the VAE) and
+// the processor hook through which a model variant changes what one Attention module attends over.
+//
+// Attention::forward does the layout work (spatial <-> tokens, GroupNorm, residual) and hands the
+// tokens to its processor, which returns the projected attention output. The default,
+// PlainAttentionProcessor, attends over the context (the input itself for self-attention). A variant
+// is an AttentionProcessor subclass that set_attention_processors() puts on the modules a chooser
+// picks by their dotted names in the model, as diffusers' set_attn_processor does with its dict:
+//  - Unique3D's multi-view self-attention (nn/layers/multiview_attention.h) on every attn1;
+//  - reference attention: a "write" processor on the reference UNet's attn1 modules records its input
+//    tokens in a store under the module's name, and a "read" processor on the main UNet's attn1
+//    modules, sharing that store, attends over cat(own tokens, recorded tokens) with attend(x, kv);
+//  - IP-Adapter: a processor on attn2 that owns to_k_ip / to_v_ip (sized from the module the chooser
+//    is given), splits the trailing image tokens off the context and adds their attention to the
+//    text attention.
+// The processor is the module's registered submodule "processor", so a processor's own parameters load
+// by name like any other: diffusers' "<attn2>.processor.to_k_ip.0.weight", Unique3D's
+// "<attn1>.processor.crosspond_attention.to_q.weight".
 #include <torch/torch.h>
+
+#include <functional>
+#include <memory>
+#include <string>
 
 #include "nn/layers/layers.h"
 
@@ -29,21 +50,56 @@ struct AttentionOptions {
   bool residual_connection = false;  // add the input to the output (VAE mid-block attention)
 };
 
+class AttentionImpl;
+
+// Computes an Attention module's output from its input tokens.
+class AttentionProcessor : public torch::nn::Module {
+ public:
+  // x [B, L, query_dim]: the module's input in token layout, after its GroupNorm; context as given to
+  // Attention::forward. Returns [B, L, query_dim] after to_out, before any residual.
+  virtual torch::Tensor process(AttentionImpl& attention, const torch::Tensor& x, const torch::Tensor& context) = 0;
+};
+
+// Queries from x; keys and values from the context, or from x itself when the context is undefined.
+class PlainAttentionProcessor : public AttentionProcessor {
+ public:
+  torch::Tensor process(AttentionImpl& attention, const torch::Tensor& x, const torch::Tensor& context) override;
+};
+
 class AttentionImpl : public torch::nn::Module {
  public:
   AttentionImpl(const AttentionOptions& options, const torch::TensorOptions& tensor_options);
 
   // hidden [B, L, C] or [B, C, H, W] (returned in the same layout). context [B, Lk, Ccross] for
-  // cross-attention, undefined for self-attention. views > 1 (self-attention only): the tokens of each
-  // group of `views` consecutive batch entries attend jointly (Unique3D's multi-view attention).
-  torch::Tensor forward(const torch::Tensor& hidden, const torch::Tensor& context = {}, int64_t views = 1);
+  // cross-attention, undefined for self-attention.
+  torch::Tensor forward(const torch::Tensor& hidden, const torch::Tensor& context = {});
+
+  // The projections and the kernel, for processors: to_out(softmax(to_q(x)·to_k(kv)ᵀ/√dim_head)·to_v(kv)),
+  // x [B, L, query_dim], kv [B, Lk, C] -> [B, L, query_dim].
+  torch::Tensor attend(const torch::Tensor& x, const torch::Tensor& kv);
+
+  // Replaces the processor (the registered submodule "processor").
+  void set_processor(std::shared_ptr<AttentionProcessor> processor);
 
   AttentionOptions options;
   GroupNorm group_norm{nullptr};
   Linear to_q{nullptr}, to_k{nullptr}, to_v{nullptr};
   torch::nn::ModuleList to_out;  // [0]: output Linear (index 1 is dropout in Python: no parameters)
   Linear out_proj{nullptr};
+  std::shared_ptr<AttentionProcessor> processor;  // a PlainAttentionProcessor unless set otherwise
 };
 TORCH_MODULE(Attention);
+
+// Picks the processor for one Attention module of a model, given its dotted name there (e.g.
+// "down_blocks.1.attentions.0.transformer_blocks.0.attn1") and the module; nullptr leaves the module's
+// processor as it is.
+using AttentionProcessorChooser =
+    std::function<std::shared_ptr<AttentionProcessor>(const std::string& name, const AttentionImpl& attention)>;
+
+// Offers every Attention module inside `model` to `choose`; returns how many got a new processor.
+size_t set_attention_processors(torch::nn::Module& model, const AttentionProcessorChooser& choose);
+
+// A chooser that gives `processor` to the transformer blocks' self-attention (modules named attn1) only.
+AttentionProcessorChooser self_attention_only(std::shared_ptr<AttentionProcessor> processor);
 
 }  // namespace u3d::nn

@@ -36,9 +36,9 @@ BasicTransformerBlockImpl::BasicTransformerBlockImpl(int64_t dim, int64_t heads,
   ff = register_module("ff", FeedForward(dim, t));
 }
 
-torch::Tensor BasicTransformerBlockImpl::forward(const torch::Tensor& x, const TransformerContext& context) {
-  torch::Tensor h = x + attn1->forward(norm1->forward(x), {}, context.self_attention_views);
-  h = h + attn2->forward(norm2->forward(h), context.encoder_hidden_states);
+torch::Tensor BasicTransformerBlockImpl::forward(const torch::Tensor& x, const torch::Tensor& encoder_hidden_states) {
+  torch::Tensor h = x + attn1->forward(norm1->forward(x));
+  h = h + attn2->forward(norm2->forward(h), encoder_hidden_states);
   return h + ff->forward(norm3->forward(h));
 }
 
@@ -56,12 +56,12 @@ Transformer2DModelImpl::Transformer2DModelImpl(int64_t heads, int64_t dim_head, 
   proj_out = register_module("proj_out", Conv2d(inner, in_channels, 1, 1, 0, true, t));
 }
 
-torch::Tensor Transformer2DModelImpl::forward(const torch::Tensor& x, const TransformerContext& context) {
+torch::Tensor Transformer2DModelImpl::forward(const torch::Tensor& x, const torch::Tensor& encoder_hidden_states) {
   const int64_t b = x.size(0), h = x.size(2), w = x.size(3);
   torch::Tensor tokens = proj_in->forward(norm->forward(x));
   const int64_t inner = tokens.size(1);
   tokens = tokens.permute({0, 2, 3, 1}).reshape({b, h * w, inner});
-  for (auto& block : blocks) tokens = block->forward(tokens, context);
+  for (auto& block : blocks) tokens = block->forward(tokens, encoder_hidden_states);
   torch::Tensor out = tokens.reshape({b, h, w, inner}).permute({0, 3, 1, 2}).contiguous();
   return proj_out->forward(out) + x;
 }

@@ -29,19 +29,13 @@ class FeedForwardImpl : public torch::nn::Module {
 };
 TORCH_MODULE(FeedForward);
 
-// What a transformer block needs at run time besides its input.
-struct TransformerContext {
-  torch::Tensor encoder_hidden_states;  // [B, Lk, cross_attention_dim]
-  int64_t self_attention_views = 1;     // > 1: Unique3D multi-view attn1 (see Attention::forward)
-};
-
 // BasicTransformerBlock (layer_norm variant): x += attn1(norm1 x); x += attn2(norm2 x, context);
-// x += ff(norm3 x). LayerNorm eps 1e-5.
+// x += ff(norm3 x). LayerNorm eps 1e-5. encoder_hidden_states: the context, [B, Lk, cross_attention_dim].
 class BasicTransformerBlockImpl : public torch::nn::Module {
  public:
   BasicTransformerBlockImpl(int64_t dim, int64_t heads, int64_t dim_head, int64_t cross_attention_dim,
                             const torch::TensorOptions& options);
-  torch::Tensor forward(const torch::Tensor& x, const TransformerContext& context);
+  torch::Tensor forward(const torch::Tensor& x, const torch::Tensor& encoder_hidden_states);
   LayerNorm norm1{nullptr}, norm2{nullptr}, norm3{nullptr};
   Attention attn1{nullptr}, attn2{nullptr};
   FeedForward ff{nullptr};
@@ -54,7 +48,7 @@ class Transformer2DModelImpl : public torch::nn::Module {
  public:
   Transformer2DModelImpl(int64_t heads, int64_t dim_head, int64_t in_channels, int64_t layers, int64_t norm_groups,
                          int64_t cross_attention_dim, const torch::TensorOptions& options);
-  torch::Tensor forward(const torch::Tensor& x, const TransformerContext& context);
+  torch::Tensor forward(const torch::Tensor& x, const torch::Tensor& encoder_hidden_states);
   GroupNorm norm{nullptr};
   Conv2d proj_in{nullptr}, proj_out{nullptr};
   torch::nn::ModuleList transformer_blocks;

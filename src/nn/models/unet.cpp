@@ -111,11 +111,11 @@ UNetDownBlockImpl::UNetDownBlockImpl(const UNetConfig& c, size_t index, int64_t 
   }
 }
 
-torch::Tensor UNetDownBlockImpl::forward(torch::Tensor h, const torch::Tensor& temb, const TransformerContext& context,
-                                         std::vector<torch::Tensor>& skips) {
+torch::Tensor UNetDownBlockImpl::forward(torch::Tensor h, const torch::Tensor& temb,
+                                         const torch::Tensor& encoder_hidden_states, std::vector<torch::Tensor>& skips) {
   for (size_t i = 0; i < resnets.size(); ++i) {
     h = resnets[i]->forward(h, temb);
-    if (!attentions.empty()) h = attentions[i]->forward(h, context);
+    if (!attentions.empty()) h = attentions[i]->forward(h, encoder_hidden_states);
     skips.push_back(h);
   }
   if (downsampler) {
@@ -139,10 +139,11 @@ UNetMidBlockImpl::UNetMidBlockImpl(const UNetConfig& c, int64_t temb_channels, c
   attention_list->push_back(attentions.back());
 }
 
-torch::Tensor UNetMidBlockImpl::forward(torch::Tensor h, const torch::Tensor& temb, const TransformerContext& context) {
+torch::Tensor UNetMidBlockImpl::forward(torch::Tensor h, const torch::Tensor& temb,
+                                        const torch::Tensor& encoder_hidden_states) {
   h = resnets[0]->forward(h, temb);
   for (size_t i = 0; i < attentions.size(); ++i) {
-    h = attentions[i]->forward(h, context);
+    h = attentions[i]->forward(h, encoder_hidden_states);
     h = resnets[i + 1]->forward(h, temb);
   }
   return h;
@@ -182,13 +183,13 @@ UNetUpBlockImpl::UNetUpBlockImpl(const UNetConfig& c, size_t index, int64_t temb
   }
 }
 
-torch::Tensor UNetUpBlockImpl::forward(torch::Tensor h, const torch::Tensor& temb, const TransformerContext& context,
-                                       std::vector<torch::Tensor>& skips) {
+torch::Tensor UNetUpBlockImpl::forward(torch::Tensor h, const torch::Tensor& temb,
+                                       const torch::Tensor& encoder_hidden_states, std::vector<torch::Tensor>& skips) {
   for (size_t i = 0; i < resnets.size(); ++i) {
     TORCH_CHECK(!skips.empty(), "UNet up block ran out of skip connections");
     h = resnets[i]->forward(torch::cat({h, skips.back()}, 1), temb);
     skips.pop_back();
-    if (!attentions.empty()) h = attentions[i]->forward(h, context);
+    if (!attentions.empty()) h = attentions[i]->forward(h, encoder_hidden_states);
   }
   if (upsampler) {
     // Upsample to the size of the skip the next block concatenates (exactly x2 when the input size is
@@ -268,12 +269,11 @@ torch::Tensor UNet2DConditionModelImpl::forward(const torch::Tensor& sample, con
   }
   record("time_embedding", emb);
 
-  TransformerContext context{encoder_hidden_states, extras.multiview_views};
   torch::Tensor h = conv_in->forward(input);
   record("conv_in", h);
   std::vector<torch::Tensor> skips{h};
   for (size_t i = 0; i < down_blocks.size(); ++i) {
-    h = down_blocks[i]->forward(h, emb, context, skips);
+    h = down_blocks[i]->forward(h, emb, encoder_hidden_states, skips);
     record("down_blocks." + std::to_string(i), h);
   }
   if (!extras.down_block_additional_residuals.empty()) {
@@ -282,11 +282,11 @@ torch::Tensor UNet2DConditionModelImpl::forward(const torch::Tensor& sample, con
                   " down-block residuals given, the model has " + std::to_string(skips.size()) + " skip connections");
     for (size_t i = 0; i < skips.size(); ++i) skips[i] = skips[i] + extras.down_block_additional_residuals[i];
   }
-  h = mid_block->forward(h, emb, context);
+  h = mid_block->forward(h, emb, encoder_hidden_states);
   if (extras.mid_block_additional_residual.defined()) h = h + extras.mid_block_additional_residual;
   record("mid_block", h);
   for (size_t i = 0; i < up_blocks.size(); ++i) {
-    h = up_blocks[i]->forward(h, emb, context, skips);
+    h = up_blocks[i]->forward(h, emb, encoder_hidden_states, skips);
     record("up_blocks." + std::to_string(i), h);
   }
   h = torch::silu(conv_norm_out->forward(h));

@@ -3,7 +3,7 @@
 // UNetMidBlock2DCrossAttn, UpBlock2D / CrossAttnUpBlock2D), built from its config.json, with parameter
 // names equal to diffusers' state-dict keys. Also covers Unique3D's variants: class embedding added to
 // the time embedding (num_class_embeds), more conv_in channels (cat_condition: the caller concatenates)
-// and multi-view attn1 (UNetExtras::multiview_views).
+// and multi-view attn1 (the caller sets a MultiViewAttentionProcessor on it, nn/layers/multiview_attention.h).
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -42,7 +42,6 @@ struct UNetConfig {
 // Optional inputs of UNet2DConditionModel::forward.
 struct UNetExtras {
   torch::Tensor class_labels;  // [N] int64; required iff the config has num_class_embeds
-  int64_t multiview_views = 1;  // > 1: attn1 of every block attends jointly over groups of this many views
   // Unique3D cat_condition: [B, C, H, W] latents with N a multiple of B; each is repeated for its N/B
   // consecutive samples and concatenated after the noisy latents on channels, before conv_in.
   torch::Tensor condition_latents;
@@ -58,7 +57,7 @@ class UNetDownBlockImpl : public torch::nn::Module {
   UNetDownBlockImpl(const UNetConfig& config, size_t index, int64_t in_channels, int64_t temb_channels,
                     const torch::TensorOptions& options);
   // Appends the hidden state after every resnet(+attention) and after the downsampler to `skips`.
-  torch::Tensor forward(torch::Tensor h, const torch::Tensor& temb, const TransformerContext& context,
+  torch::Tensor forward(torch::Tensor h, const torch::Tensor& temb, const torch::Tensor& encoder_hidden_states,
                         std::vector<torch::Tensor>& skips);
   std::vector<ResnetBlock2D> resnets;
   std::vector<Transformer2DModel> attentions;
@@ -69,7 +68,7 @@ TORCH_MODULE(UNetDownBlock);
 class UNetMidBlockImpl : public torch::nn::Module {
  public:
   UNetMidBlockImpl(const UNetConfig& config, int64_t temb_channels, const torch::TensorOptions& options);
-  torch::Tensor forward(torch::Tensor h, const torch::Tensor& temb, const TransformerContext& context);
+  torch::Tensor forward(torch::Tensor h, const torch::Tensor& temb, const torch::Tensor& encoder_hidden_states);
   std::vector<ResnetBlock2D> resnets;
   std::vector<Transformer2DModel> attentions;
 };
@@ -80,7 +79,7 @@ class UNetUpBlockImpl : public torch::nn::Module {
   // index: position in up_block_types (0 = deepest).
   UNetUpBlockImpl(const UNetConfig& config, size_t index, int64_t temb_channels, const torch::TensorOptions& options);
   // Consumes skips from the back, concatenating [h, skip] on channels before each resnet.
-  torch::Tensor forward(torch::Tensor h, const torch::Tensor& temb, const TransformerContext& context,
+  torch::Tensor forward(torch::Tensor h, const torch::Tensor& temb, const torch::Tensor& encoder_hidden_states,
                         std::vector<torch::Tensor>& skips);
   std::vector<ResnetBlock2D> resnets;
   std::vector<Transformer2DModel> attentions;
