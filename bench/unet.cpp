@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
-#include "nn/config_json.h"
-#include "nn/layers.h"
+#include "nn/checkpoint/config_json.h"
+#include "nn/layers/layers.h"
+#include "nn/models/unet.h"
 #include "nn/runtime.h"
-#include "nn/unet.h"
 
 namespace {
 

@@ -8,10 +8,10 @@
 #include <string>
 
 #include "core/error.h"
-#include "nn/config_json.h"
-#include "nn/safetensors.h"
-#include "nn/state_dict_loader.h"
-#include "nn/tensor_map.h"
+#include "nn/checkpoint/config_json.h"
+#include "nn/checkpoint/safetensors.h"
+#include "nn/checkpoint/state_dict_loader.h"
+#include "nn/checkpoint/tensor_map.h"
 
 namespace u3d::nn::test {
 

@@ -1,8 +1,10 @@
-#include "nn/attention.h"
+#include "nn/layers/attention.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+
+#include "nn/layers/multiview_attention.h"
 
 namespace u3d::nn {
 namespace {
@@ -39,11 +41,48 @@ TEST(Attention, MultiViewJoinsConsecutiveBatchEntries) {
   for (auto& p : attn->parameters()) p.data().normal_();
   torch::NoGradGuard no_grad;
   auto x = torch::randn({4, 5, 8}, torch::kDouble);
-  // Two views at a time: entries {0,1} attend over 10 tokens together, as one batch entry would.
-  auto joint = attn->forward(x, {}, 2);
+  auto plain = attn->forward(x);
   auto merged = attn->forward(x.reshape({2, 10, 8})).reshape({4, 5, 8});
+  // Two views at a time: entries {0,1} attend over 10 tokens together, as one batch entry would.
+  attn->set_processor(std::make_shared<MultiViewAttentionProcessor>(2));
+  auto joint = attn->forward(x);
   EXPECT_LT((joint - merged).abs().max().item<double>(), 1e-12);
-  EXPECT_GT((joint - attn->forward(x)).abs().max().item<double>(), 1e-6);
+  EXPECT_GT((joint - plain).abs().max().item<double>(), 1e-6);
+  EXPECT_THROW(attn->forward(x.narrow(0, 0, 3)), c10::Error);
+}
+
+// A model whose attention modules sit where the UNet's transformer blocks put theirs.
+struct TwoBlocksImpl : torch::nn::Module {
+  TwoBlocksImpl() {
+    AttentionOptions o;
+    o.query_dim = 8;
+    o.heads = 2;
+    o.dim_head = 4;
+    for (const char* block : {"a", "b"}) {
+      auto holder = register_module(block, std::make_shared<torch::nn::Module>());
+      holder->register_module("attn1", Attention(o, torch::TensorOptions()));
+      holder->register_module("attn2", Attention(o, torch::TensorOptions()));
+    }
+  }
+};
+
+TEST(Attention, ProcessorsGoWhereTheChooserSays) {
+  TwoBlocksImpl model;
+  auto multiview = std::make_shared<MultiViewAttentionProcessor>(2);
+  EXPECT_EQ(set_attention_processors(model, self_attention_only(multiview)), 2u);
+  for (const auto& item : model.named_modules("", false)) {
+    auto* attention = dynamic_cast<AttentionImpl*>(item.value().get());
+    if (!attention) continue;
+    const bool self_attention = item.key().ends_with(".attn1");
+    EXPECT_EQ(attention->processor == multiview, self_attention) << item.key();
+    if (!self_attention) {
+      EXPECT_NE(std::dynamic_pointer_cast<PlainAttentionProcessor>(attention->processor), nullptr);
+    }
+  }
+  // The processor is the submodule "processor"; this one adds no parameters (to_q, to_k, to_v, to_out.0
+  // weight and bias in each of the four modules).
+  EXPECT_EQ(model.named_modules("", false).find("a.attn1.processor")->get(), multiview.get());
+  EXPECT_EQ(model.named_parameters().size(), 4u * 5u);
 }
 
 }  // namespace

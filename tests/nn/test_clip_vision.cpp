@@ -1,10 +1,10 @@
-#include "nn/clip_vision.h"
+#include "nn/models/clip_vision.h"
 
 #include <gtest/gtest.h>
 
 #include "core/image.h"
 #include "golden.h"
-#include "nn/clip_image_processor.h"
+#include "nn/preprocess/clip_image_processor.h"
 
 namespace u3d::nn {
 namespace {

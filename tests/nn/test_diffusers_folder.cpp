@@ -1,4 +1,4 @@
-#include "nn/diffusers_folder.h"
+#include "nn/checkpoint/diffusers_folder.h"
 
 #include <gtest/gtest.h>
 

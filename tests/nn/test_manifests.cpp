@@ -7,9 +7,9 @@
 #include <vector>
 
 #include "golden.h"
-#include "nn/clip_vision.h"
-#include "nn/unet.h"
-#include "nn/vae.h"
+#include "nn/models/clip_vision.h"
+#include "nn/models/unet.h"
+#include "nn/models/vae.h"
 
 namespace u3d::nn {
 namespace {

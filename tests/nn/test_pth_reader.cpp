@@ -8,9 +8,9 @@
 #include <unistd.h>
 
 #include "core/error.h"
-#include "nn/pth_reader.h"
-#include "nn/safetensors.h"
-#include "nn/weights_file.h"
+#include "nn/checkpoint/pth_reader.h"
+#include "nn/checkpoint/safetensors.h"
+#include "nn/checkpoint/weights_file.h"
 
 namespace fs = std::filesystem;
 using namespace u3d::nn;

@@ -6,11 +6,11 @@
 #include <string>
 
 #include "core/error.h"
-#include "nn/noise_source.h"
-#include "nn/safetensors.h"
-#include "nn/scheduler.h"
-#include "nn/scheduler_euler_ancestral.h"
-#include "nn/scheduler_sigma_base.h"
+#include "nn/checkpoint/safetensors.h"
+#include "nn/schedulers/noise_source.h"
+#include "nn/schedulers/scheduler.h"
+#include "nn/schedulers/scheduler_euler_ancestral.h"
+#include "nn/schedulers/scheduler_sigma_base.h"
 
 namespace fs = std::filesystem;
 using namespace u3d::nn;

@@ -1,4 +1,4 @@
-#include "nn/state_dict_loader.h"
+#include "nn/checkpoint/state_dict_loader.h"
 
 #include <gtest/gtest.h>
 

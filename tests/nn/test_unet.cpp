@@ -1,4 +1,4 @@
-#include "nn/unet.h"
+#include "nn/models/unet.h"
 
 #include <gtest/gtest.h>
 

@@ -3,8 +3,9 @@
 #include <gtest/gtest.h>
 
 #include "golden.h"
-#include "nn/pil_resize.h"
-#include "nn/unet.h"
+#include "nn/layers/multiview_attention.h"
+#include "nn/models/unet.h"
+#include "nn/preprocess/pil_resize.h"
 
 namespace u3d::nn {
 namespace {
@@ -20,18 +21,23 @@ TEST(UNetMultiView, MatchesUnique3DForward) {
   auto in = golden_tensors("unet_mv", "inputs");
   auto ref = golden_tensors("unet_mv", "outputs");
 
+  // The attn1 of every transformer block (each has one attn2) takes the multi-view processor.
+  size_t transformer_blocks = 0;
+  for (const auto& item : unet->named_modules("", false)) transformer_blocks += item.key().ends_with(".attn2");
+  EXPECT_GT(transformer_blocks, 0u);
+  EXPECT_EQ(set_attention_processors(*unet, self_attention_only(std::make_shared<MultiViewAttentionProcessor>(4))),
+            transformer_blocks);
   TensorMap trace;
   UNetExtras extras;
   extras.class_labels = in["class_labels"];
   extras.condition_latents = in["condition_latents"];
-  extras.multiview_views = 4;
   extras.trace = &trace;
   torch::Tensor out = unet->forward(in["sample"], in["timestep"], in["encoder_hidden_states"], extras);
   EXPECT_CLOSE_TO_GOLDEN(trace["conv_in_input"], ref["internal.conv_in_input"], 0.0);
   EXPECT_CLOSE_TO_GOLDEN(out, ref["sample_out"], kForwardTolerance);
 
   // Without the joint attention the result must differ: the test sees the multi-view path.
-  extras.multiview_views = 1;
+  set_attention_processors(*unet, self_attention_only(std::make_shared<PlainAttentionProcessor>()));
   EXPECT_GT(max_abs_diff(unet->forward(in["sample"], in["timestep"], in["encoder_hidden_states"], extras),
                          ref["sample_out"]),
             1e-3);

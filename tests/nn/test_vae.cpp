@@ -1,4 +1,4 @@
-#include "nn/vae.h"
+#include "nn/models/vae.h"
 
 #include <gtest/gtest.h>
 

@@ -1,0 +1,244 @@
+#include "nn/checkpoint/pth_reader.h"
+
+#include <caffe2/serialize/inline_container.h>
+
+#include <fstream>
+#include <map>
+
+#include "core/error.h"
+#include "nn/checkpoint/pickle_reader.h"
+#include "nn/checkpoint/zip_crc.h"
+
+namespace u3d::nn {
+namespace {
+
+using pickle::Value;
+
+// A storage record named by a persistent id; read from the archive when a tensor uses it.
+struct StorageRef : pickle::Object {
+  std::string key;  // record "data/<key>"
+  c10::ScalarType dtype;
+  int64_t numel;
+};
+
+struct TensorRef : pickle::Object {
+  std::shared_ptr<const StorageRef> storage;
+  int64_t offset;
+  std::vector<int64_t> sizes;
+  std::vector<int64_t> strides;
+};
+
+const std::map<std::string, c10::ScalarType>& storage_types() {
+  static const std::map<std::string, c10::ScalarType> types = {
+      {"FloatStorage", c10::kFloat}, {"DoubleStorage", c10::kDouble}, {"HalfStorage", c10::kHalf},
+      {"BFloat16Storage", c10::kBFloat16}, {"LongStorage", c10::kLong}, {"IntStorage", c10::kInt},
+      {"ShortStorage", c10::kShort}, {"CharStorage", c10::kChar}, {"ByteStorage", c10::kByte},
+      {"BoolStorage", c10::kBool}};
+  return types;
+}
+
+int64_t as_int(const Value& v, const std::string& what) {
+  require(v.is<int64_t>(), what + " is a " + v.type_name() + ", expected an int");
+  return v.as<int64_t>();
+}
+
+std::vector<int64_t> as_int_tuple(const Value& v, const std::string& what) {
+  require(v.is<std::shared_ptr<pickle::Tuple>>(), what + " is a " + v.type_name() + ", expected a tuple");
+  std::vector<int64_t> out;
+  for (const Value& item : v.as<std::shared_ptr<pickle::Tuple>>()->items) out.push_back(as_int(item, what + " item"));
+  return out;
+}
+
+// The whitelist: what torch.save writes for a state dict, and nothing that could run code.
+class StateDictHooks : public pickle::PickleHooks {
+ public:
+  explicit StateDictHooks(std::string source) : source_(std::move(source)) {}
+
+  void check_global(const pickle::Global& g) override {
+    const bool allowed = (g.module == "collections" && g.name == "OrderedDict") ||
+                         (g.module == "torch._utils" && (g.name == "_rebuild_tensor_v2" || g.name == "_rebuild_parameter")) ||
+                         (g.module == "torch" && storage_types().count(g.name));
+    require(allowed, source_ + ": refuses the pickled global '" + g.qualified() +
+                         "': only plain state dicts of tensors are loaded (no code from the file is run)");
+  }
+
+  Value call(const pickle::Global& g, const std::vector<Value>& args) override {
+    if (g.name == "OrderedDict") {
+      require(args.empty(), source_ + ": OrderedDict built from arguments is not supported");
+      return std::make_shared<pickle::Dict>();
+    }
+    if (g.name == "_rebuild_tensor_v2") {
+      // (storage, storage_offset, size, stride, requires_grad, backward_hooks[, metadata])
+      require(args.size() == 6 || args.size() == 7,
+              source_ + ": _rebuild_tensor_v2 with " + std::to_string(args.size()) + " arguments");
+      auto storage = std::dynamic_pointer_cast<const StorageRef>(object_of(args[0]));
+      require(storage != nullptr, source_ + ": _rebuild_tensor_v2 without a storage");
+      auto t = std::make_shared<TensorRef>();
+      t->storage = storage;
+      t->offset = as_int(args[1], source_ + ": storage offset");
+      t->sizes = as_int_tuple(args[2], source_ + ": tensor size");
+      t->strides = as_int_tuple(args[3], source_ + ": tensor stride");
+      require(t->sizes.size() == t->strides.size(), source_ + ": tensor size and stride differ in length");
+      return std::shared_ptr<const pickle::Object>(t);
+    }
+    if (g.name == "_rebuild_parameter") {
+      // (data, requires_grad, backward_hooks): a Parameter is its data for inference.
+      require(args.size() == 3 && std::dynamic_pointer_cast<const TensorRef>(object_of(args[0])),
+              source_ + ": malformed _rebuild_parameter");
+      return args[0];
+    }
+    throw Error(source_ + ": '" + g.qualified() + "' cannot be called");
+  }
+
+  Value persistent_load(const Value& pid) override {
+    // ('storage', torch.<T>Storage, key, location, numel)
+    const bool is_tuple = pid.is<std::shared_ptr<pickle::Tuple>>();
+    require(is_tuple && pid.as<std::shared_ptr<pickle::Tuple>>()->items.size() == 5,
+            source_ + ": unsupported persistent id (" + pid.type_name() + ")");
+    const std::vector<Value>& t = pid.as<std::shared_ptr<pickle::Tuple>>()->items;
+    require(t[0].is<std::string>() && t[0].as<std::string>() == "storage", source_ + ": persistent id is not a storage");
+    require(t[1].is<pickle::Global>() && t[1].as<pickle::Global>().module == "torch" &&
+                storage_types().count(t[1].as<pickle::Global>().name),
+            source_ + ": storage of unsupported type " + t[1].type_name());
+    require(t[2].is<std::string>(), source_ + ": storage key is a " + t[2].type_name());
+    auto storage = std::make_shared<StorageRef>();
+    storage->key = t[2].as<std::string>();
+    storage->dtype = storage_types().at(t[1].as<pickle::Global>().name);
+    storage->numel = as_int(t[4], source_ + ": storage size");
+    require(storage->numel >= 0, source_ + ": negative storage size");
+    return std::shared_ptr<const pickle::Object>(storage);
+  }
+
+  Value build(const Value& obj, const Value& state) override {
+    // torch pickles a state dict's `_metadata` (per-module versions) as OrderedDict state: not needed.
+    require(obj.is<std::shared_ptr<pickle::Dict>>(), source_ + ": BUILD on a " + obj.type_name());
+    return obj;
+  }
+
+ private:
+  std::shared_ptr<const pickle::Object> object_of(const Value& v) const {
+    return v.is<std::shared_ptr<const pickle::Object>>() ? v.as<std::shared_ptr<const pickle::Object>>() : nullptr;
+  }
+  std::string source_;
+};
+
+void check_zip_magic(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  require(bool(in), "cannot open checkpoint " + path.string());
+  char magic[4] = {};
+  in.read(magic, 4);
+  require(in.gcount() == 4, path.string() + ": file too short to be a PyTorch checkpoint");
+  if (uint8_t(magic[0]) == 0x80) {  // the old format starts with a bare pickle (PROTO)
+    throw Error(path.string() + ": legacy (pre-1.6, non-zip) torch.save format is not supported; re-save it "
+                                "with a recent torch or convert it to .safetensors");
+  }
+  require(std::string_view(magic, 4) == std::string_view("PK\x03\x04", 4),
+          path.string() + ": not a PyTorch zip checkpoint (no zip header)");
+}
+
+// Reads records and checks each against the CRC-32 in the zip directory (libtorch does not).
+class RecordReader {
+ public:
+  explicit RecordReader(const std::filesystem::path& path)
+      : source_(path.string()), reader_(source_), crcs_(zip_record_crcs(path)) {}
+
+  bool has(const std::string& name) { return reader_.hasRecord(name); }
+
+  // `user` says what needs the record, for errors ("tensor 'conv.weight'").
+  std::tuple<at::DataPtr, size_t> read(const std::string& name, const std::string& user) {
+    auto [data, size] = reader_.getRecord(name);
+    auto crc = crcs_.find(name);
+    require(crc != crcs_.end(), source_ + ": record " + name + " is not in the zip directory");
+    require(crc32_of(data.get(), size) == crc->second,
+            source_ + ": " + user + ": record " + name + " fails its CRC check (the file is corrupt)");
+    return {std::move(data), size};
+  }
+
+ private:
+  std::string source_;
+  caffe2::serialize::PyTorchStreamReader reader_;
+  std::map<std::string, uint32_t> crcs_;
+};
+
+// Reads each storage record once, so tensors sharing a storage share it here too.
+class StorageCache {
+ public:
+  StorageCache(RecordReader& reader, std::string source) : reader_(reader), source_(std::move(source)) {}
+
+  c10::Storage get(const StorageRef& ref, const std::string& tensor_name) {
+    auto it = cache_.find(ref.key);
+    if (it != cache_.end()) return it->second;
+    const std::string record = "data/" + ref.key;
+    require(reader_.has(record), source_ + ": tensor '" + tensor_name + "': missing record " + record);
+    auto [data, nbytes] = reader_.read(record, "tensor '" + tensor_name + "'");
+    const size_t expected = size_t(ref.numel) * c10::elementSize(ref.dtype);
+    require(nbytes == expected, source_ + ": tensor '" + tensor_name + "': record " + record + " holds " +
+                                    std::to_string(nbytes) + " bytes, its storage needs " + std::to_string(expected));
+    c10::Storage storage(c10::Storage::use_byte_size_t(), nbytes, std::move(data), nullptr, false);
+    cache_.emplace(ref.key, storage);
+    return storage;
+  }
+
+ private:
+  RecordReader& reader_;
+  std::string source_;
+  std::map<std::string, c10::Storage> cache_;
+};
+
+torch::Tensor materialize(const TensorRef& ref, StorageCache& storages, const std::string& source,
+                          const std::string& name) {
+  const auto where = source + ": tensor '" + name + "'";
+  int64_t last = ref.offset;  // highest element index the view touches
+  bool empty = false;
+  for (size_t d = 0; d < ref.sizes.size(); ++d) {
+    require(ref.sizes[d] >= 0 && ref.strides[d] >= 0, where + ": negative size or stride");
+    if (ref.sizes[d] == 0) empty = true;
+    else last += (ref.sizes[d] - 1) * ref.strides[d];
+  }
+  require(ref.offset >= 0 && (empty || last < ref.storage->numel),
+          where + ": view (offset " + std::to_string(ref.offset) + ") reaches past its storage of " +
+              std::to_string(ref.storage->numel) + " elements");
+  c10::Storage storage = storages.get(*ref.storage, name);
+  return torch::empty({0}, torch::TensorOptions().dtype(ref.storage->dtype))
+      .set_(storage, ref.offset, ref.sizes, ref.strides);
+}
+
+}  // namespace
+
+TensorMap load_pth(const std::filesystem::path& path) {
+  check_zip_magic(path);
+  const std::string source = path.string();
+  try {
+    RecordReader reader(path);
+    if (reader.has("byteorder")) {
+      auto [data, size] = reader.read("byteorder", "byte order");
+      require(std::string_view(static_cast<const char*>(data.get()), size) == "little",
+              source + ": big-endian checkpoints are not supported");
+    }
+    require(reader.has("data.pkl"), source + ": zip archive without data.pkl (not a torch.save file)");
+    auto [pkl, pkl_size] = reader.read("data.pkl", "the pickled state dict");
+    StateDictHooks hooks(source);
+    const Value root = pickle::unpickle(std::string_view(static_cast<const char*>(pkl.get()), pkl_size), hooks,
+                                        source + ":data.pkl");
+    require(root.is<std::shared_ptr<pickle::Dict>>(),
+            source + ": holds a " + root.type_name() + ", expected a state dict {name: tensor}");
+
+    StorageCache storages(reader, source);
+    TensorMap tensors;
+    for (const auto& [key, value] : root.as<std::shared_ptr<pickle::Dict>>()->items) {
+      require(key.is<std::string>(), source + ": state dict key is a " + key.type_name());
+      const std::string& name = key.as<std::string>();
+      auto ref = value.is<std::shared_ptr<const pickle::Object>>()
+                     ? std::dynamic_pointer_cast<const TensorRef>(value.as<std::shared_ptr<const pickle::Object>>())
+                     : nullptr;
+      require(ref != nullptr, source + ": entry '" + name + "' is a " + value.type_name() + ", not a tensor");
+      tensors[name] = materialize(*ref, storages, source, name);
+    }
+    return tensors;
+  } catch (const c10::Error& e) {
+    const std::string what = e.what_without_backtrace();
+    throw Error(source + ": corrupt or truncated PyTorch zip archive (" + what.substr(0, what.find('\n')) + ")");
+  }
+}
+
+}  // namespace u3d::nn

@@ -1,0 +1,21 @@
+#pragma once
+// PyTorch checkpoints in the zip format of torch.save (torch >= 1.6; also diffusers' *.bin weights),
+// holding one flat state dict {name: tensor}, e.g. Unique3D's ckpt/img2mvimg/unet_state_dict.pth.
+//
+// The pickle is read by a restricted reader that only knows collections.OrderedDict,
+// torch._utils._rebuild_tensor_v2 / _rebuild_parameter and the typed storages torch.<T>Storage
+// (Float, Double, Half, BFloat16, Long, Int, Short, Char, Byte, Bool): any other global (code the
+// file would run in Python) is refused. Storage offsets, strides and storages shared between tensors
+// are honoured: tensors are returned as views of their (shared) storage, on the CPU.
+// Every record is checked against its zip CRC-32. The legacy pre-1.6 format, truncated or corrupt
+// archives, non-tensor entries and views reaching outside their storage are u3d::Error naming the
+// file (and tensor).
+#include <filesystem>
+
+#include "nn/checkpoint/tensor_map.h"
+
+namespace u3d::nn {
+
+TensorMap load_pth(const std::filesystem::path& path);
+
+}  // namespace u3d::nn

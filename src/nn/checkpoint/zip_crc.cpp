@@ -1,0 +1,75 @@
+#include "nn/checkpoint/zip_crc.h"
+
+#include <caffe2/serialize/crc_alt.h>  // defines its functions: include in this one file only
+
+#include <algorithm>
+#include <fstream>
+#include <vector>
+
+#include "core/error.h"
+
+namespace u3d::nn {
+namespace {
+
+uint64_t le(const std::string& b, size_t pos, int n) {
+  uint64_t v = 0;
+  for (int i = n - 1; i >= 0; --i) v = (v << 8) | uint8_t(b[pos + i]);
+  return v;
+}
+
+std::string read_at(std::ifstream& in, uint64_t offset, uint64_t size, const std::string& source) {
+  std::string buf(size, '\0');
+  in.clear();
+  in.seekg(std::streamoff(offset));
+  in.read(buf.data(), std::streamsize(size));
+  require(in.gcount() == std::streamsize(size), source + ": zip directory points outside the file");
+  return buf;
+}
+
+}  // namespace
+
+uint32_t crc32_of(const void* data, size_t size) { return crc32_fast(data, size); }
+
+std::map<std::string, uint32_t> zip_record_crcs(const std::filesystem::path& path) {
+  const std::string source = path.string();
+  std::ifstream in(path, std::ios::binary);
+  require(bool(in), "cannot open " + source);
+  const uint64_t file_size = std::filesystem::file_size(path);
+  auto bad = [&](const std::string& what) { return Error(source + ": corrupt zip directory (" + what + ")"); };
+
+  // End of central directory record: 22 bytes plus a comment of up to 64 KiB, at the end of the file.
+  const uint64_t tail_size = std::min<uint64_t>(file_size, 22 + 65535);
+  const std::string tail = read_at(in, file_size - tail_size, tail_size, source);
+  const size_t eocd = tail.rfind(std::string("PK\x05\x06", 4));
+  if (eocd == std::string::npos || eocd + 22 > tail.size()) throw bad("no end-of-directory record");
+  uint64_t entries = le(tail, eocd + 10, 2);
+  uint64_t dir_size = le(tail, eocd + 12, 4);
+  uint64_t dir_offset = le(tail, eocd + 16, 4);
+  if (entries == 0xffff || dir_size == 0xffffffff || dir_offset == 0xffffffff) {
+    // zip64: a locator just before the record points to the zip64 end-of-directory record.
+    if (eocd < 20 || tail.compare(eocd - 20, 4, std::string("PK\x06\x07", 4)) != 0) throw bad("no zip64 locator");
+    const std::string z64 = read_at(in, le(tail, eocd - 20 + 8, 8), 56, source);
+    if (z64.compare(0, 4, std::string("PK\x06\x06", 4)) != 0) throw bad("no zip64 end-of-directory record");
+    entries = le(z64, 32, 8);
+    dir_size = le(z64, 40, 8);
+    dir_offset = le(z64, 48, 8);
+  }
+  if (dir_offset > file_size || dir_size > file_size - dir_offset) throw bad("directory outside the file");
+
+  const std::string dir = read_at(in, dir_offset, dir_size, source);
+  std::map<std::string, uint32_t> crcs;
+  size_t pos = 0;
+  for (uint64_t i = 0; i < entries; ++i) {
+    if (pos + 46 > dir.size() || dir.compare(pos, 4, std::string("PK\x01\x02", 4)) != 0) throw bad("bad entry header");
+    const auto crc = uint32_t(le(dir, pos + 16, 4));
+    const size_t name_len = le(dir, pos + 28, 2), extra_len = le(dir, pos + 30, 2), comment_len = le(dir, pos + 32, 2);
+    if (pos + 46 + name_len > dir.size()) throw bad("entry name outside the directory");
+    const std::string name = dir.substr(pos + 46, name_len);
+    const size_t slash = name.find('/');
+    crcs[slash == std::string::npos ? name : name.substr(slash + 1)] = crc;
+    pos += 46 + name_len + extra_len + comment_len;
+  }
+  return crcs;
+}
+
+}  // namespace u3d::nn

@@ -1,0 +1,117 @@
+#include "nn/layers/attention.h"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+namespace u3d::nn {
+
+namespace {
+
+// [B, L, H*D] -> [B*H, L, D], contiguous.
+torch::Tensor split_heads(const torch::Tensor& x, int64_t heads) {
+  const int64_t b = x.size(0), l = x.size(1), d = x.size(2) / heads;
+  return x.reshape({b, l, heads, d}).permute({0, 2, 1, 3}).reshape({b * heads, l, d});
+}
+
+// [B*H, L, D] -> [B, L, H*D].
+torch::Tensor merge_heads(const torch::Tensor& x, int64_t heads) {
+  const int64_t bh = x.size(0), l = x.size(1), d = x.size(2);
+  return x.reshape({bh / heads, heads, l, d}).permute({0, 2, 1, 3}).reshape({bh / heads, l, heads * d});
+}
+
+// Softmax in at least fp32: half-precision scores are upcast for it.
+torch::Tensor softmax_fp32(const torch::Tensor& scores) {
+  if (scores.scalar_type() != torch::kHalf && scores.scalar_type() != torch::kBFloat16) return scores.softmax(-1);
+  return scores.softmax(-1, torch::kFloat).to(scores.scalar_type());
+}
+
+}  // namespace
+
+torch::Tensor multi_head_attention(const torch::Tensor& q, const torch::Tensor& k, const torch::Tensor& v,
+                                   int64_t heads, double scale, int64_t score_budget) {
+  TORCH_CHECK(q.dim() == 3 && k.dim() == 3 && v.dim() == 3, "attention expects [B, L, C] inputs");
+  TORCH_CHECK(q.size(2) % heads == 0, "attention: ", q.size(2), " channels do not split into ", heads, " heads");
+  torch::Tensor qh = split_heads(q * scale, heads);
+  torch::Tensor kt = split_heads(k, heads).transpose(1, 2);
+  torch::Tensor vh = split_heads(v, heads);
+  const int64_t bh = qh.size(0), lq = qh.size(1), lk = kt.size(2);
+  const int64_t chunk = std::clamp<int64_t>(score_budget / std::max<int64_t>(bh * lk, 1), 1, std::max<int64_t>(lq, 1));
+  if (chunk >= lq) return merge_heads(torch::bmm(softmax_fp32(torch::bmm(qh, kt)), vh), heads);
+
+  torch::Tensor out = torch::empty({bh, lq, vh.size(2)}, vh.options());
+  for (int64_t start = 0; start < lq; start += chunk) {
+    const int64_t n = std::min(chunk, lq - start);
+    torch::Tensor probs = softmax_fp32(torch::bmm(qh.narrow(1, start, n), kt));
+    out.narrow(1, start, n).copy_(torch::bmm(probs, vh));
+  }
+  return merge_heads(out, heads);
+}
+
+torch::Tensor PlainAttentionProcessor::process(AttentionImpl& attention, const torch::Tensor& x,
+                                               const torch::Tensor& context) {
+  return attention.attend(x, context.defined() ? context : x);
+}
+
+AttentionImpl::AttentionImpl(const AttentionOptions& o, const torch::TensorOptions& t) : options(o) {
+  const int64_t inner = o.heads * o.dim_head;
+  const int64_t kv_dim = o.cross_attention_dim > 0 ? o.cross_attention_dim : o.query_dim;
+  // Registration order follows diffusers so named_parameters() lists keys the same way.
+  if (o.norm_groups > 0) group_norm = register_module("group_norm", GroupNorm(o.norm_groups, o.query_dim, o.norm_eps, t));
+  to_q = register_module("to_q", Linear(o.query_dim, inner, o.qkv_bias, t));
+  to_k = register_module("to_k", Linear(kv_dim, inner, o.qkv_bias, t));
+  to_v = register_module("to_v", Linear(kv_dim, inner, o.qkv_bias, t));
+  out_proj = Linear(inner, o.query_dim, true, t);
+  to_out = register_module("to_out", torch::nn::ModuleList(out_proj));
+  processor = register_module("processor", std::make_shared<PlainAttentionProcessor>());
+}
+
+torch::Tensor AttentionImpl::forward(const torch::Tensor& hidden, const torch::Tensor& context) {
+  torch::Tensor x = hidden;
+  const bool spatial = x.dim() == 4;
+  int64_t b = 0, c = 0, h = 0, w = 0;
+  if (spatial) {
+    b = x.size(0), c = x.size(1), h = x.size(2), w = x.size(3);
+    x = x.reshape({b, c, h * w}).transpose(1, 2);
+  }
+  const torch::Tensor residual = x;
+  if (group_norm) x = group_norm->forward(x.transpose(1, 2)).transpose(1, 2);
+
+  torch::Tensor out = processor->process(*this, x, context);
+
+  if (options.residual_connection) out = out + residual;
+  if (spatial) out = out.transpose(1, 2).reshape({b, c, h, w});
+  return out;
+}
+
+torch::Tensor AttentionImpl::attend(const torch::Tensor& x, const torch::Tensor& kv) {
+  const double scale = 1.0 / std::sqrt(static_cast<double>(options.dim_head));
+  return out_proj->forward(
+      multi_head_attention(to_q->forward(x), to_k->forward(kv), to_v->forward(kv), options.heads, scale));
+}
+
+void AttentionImpl::set_processor(std::shared_ptr<AttentionProcessor> p) {
+  TORCH_CHECK(p, "Attention: the processor must not be null");
+  processor = replace_module("processor", std::move(p));
+}
+
+size_t set_attention_processors(torch::nn::Module& model, const AttentionProcessorChooser& choose) {
+  size_t changed = 0;
+  for (const auto& item : model.named_modules("", /*include_self=*/false)) {
+    auto* attention = dynamic_cast<AttentionImpl*>(item.value().get());
+    if (!attention) continue;
+    if (auto p = choose(item.key(), *attention)) {
+      attention->set_processor(std::move(p));
+      ++changed;
+    }
+  }
+  return changed;
+}
+
+AttentionProcessorChooser self_attention_only(std::shared_ptr<AttentionProcessor> processor) {
+  return [processor = std::move(processor)](const std::string& name, const AttentionImpl&) {
+    return name == "attn1" || name.ends_with(".attn1") ? processor : nullptr;
+  };
+}
+
+}  // namespace u3d::nn

@@ -1,0 +1,52 @@
+#include "nn/layers/layers.h"
+
+namespace u3d::nn {
+
+LinearImpl::LinearImpl(int64_t in_features, int64_t out_features, bool has_bias, const torch::TensorOptions& options) {
+  weight = register_parameter("weight", torch::empty({out_features, in_features}, options), false);
+  if (has_bias) bias = register_parameter("bias", torch::empty({out_features}, options), false);
+}
+
+torch::Tensor LinearImpl::forward(const torch::Tensor& x) { return torch::linear(x, weight, bias); }
+
+Conv2dImpl::Conv2dImpl(int64_t in_channels, int64_t out_channels, int64_t kernel, int64_t stride_, int64_t padding_,
+                       bool has_bias, const torch::TensorOptions& options)
+    : stride(stride_), padding(padding_) {
+  weight = register_parameter("weight", torch::empty({out_channels, in_channels, kernel, kernel}, options), false);
+  if (has_bias) bias = register_parameter("bias", torch::empty({out_channels}, options), false);
+}
+
+torch::Tensor Conv2dImpl::forward(const torch::Tensor& x) {
+  return torch::conv2d(x, weight, bias, {stride, stride}, {padding, padding});
+}
+
+GroupNormImpl::GroupNormImpl(int64_t groups_, int64_t channels, double eps_, const torch::TensorOptions& options)
+    : groups(groups_), eps(eps_) {
+  TORCH_CHECK(channels % groups == 0, "GroupNorm: ", channels, " channels are not divisible into ", groups, " groups");
+  weight = register_parameter("weight", torch::empty({channels}, options), false);
+  bias = register_parameter("bias", torch::empty({channels}, options), false);
+}
+
+torch::Tensor GroupNormImpl::forward(const torch::Tensor& x) { return torch::group_norm(x, groups, weight, bias, eps); }
+
+LayerNormImpl::LayerNormImpl(int64_t dim, double eps_, const torch::TensorOptions& options) : eps(eps_) {
+  weight = register_parameter("weight", torch::empty({dim}, options), false);
+  bias = register_parameter("bias", torch::empty({dim}, options), false);
+}
+
+torch::Tensor LayerNormImpl::forward(const torch::Tensor& x) {
+  return torch::layer_norm(x, {weight.size(0)}, weight, bias, eps);
+}
+
+EmbeddingImpl::EmbeddingImpl(int64_t count, int64_t dim, const torch::TensorOptions& options) {
+  weight = register_parameter("weight", torch::empty({count, dim}, options), false);
+}
+
+torch::Tensor EmbeddingImpl::forward(const torch::Tensor& indices) { return torch::embedding(weight, indices); }
+
+void randomize_parameters(torch::nn::Module& module, double std) {
+  torch::NoGradGuard no_grad;
+  for (auto& p : module.parameters()) p.normal_(0.0, std);
+}
+
+}  // namespace u3d::nn

@@ -1,0 +1,69 @@
+#include "nn/layers/transformer_2d.h"
+
+namespace u3d::nn {
+
+GEGLUImpl::GEGLUImpl(int64_t dim_in, int64_t dim_out, const torch::TensorOptions& t) {
+  proj = register_module("proj", Linear(dim_in, 2 * dim_out, true, t));
+}
+
+torch::Tensor GEGLUImpl::forward(const torch::Tensor& x) {
+  auto halves = proj->forward(x).chunk(2, -1);
+  return halves[0] * torch::gelu(halves[1]);
+}
+
+FeedForwardImpl::FeedForwardImpl(int64_t dim, const torch::TensorOptions& t) {
+  geglu = GEGLU(dim, 4 * dim, t);
+  proj_out = Linear(4 * dim, dim, true, t);
+  // Index 1 is Python's Dropout: kept as an Identity so the output Linear is net.2 as in the checkpoints.
+  net = register_module("net", torch::nn::ModuleList(geglu, torch::nn::Identity(), proj_out));
+}
+
+torch::Tensor FeedForwardImpl::forward(const torch::Tensor& x) { return proj_out->forward(geglu->forward(x)); }
+
+BasicTransformerBlockImpl::BasicTransformerBlockImpl(int64_t dim, int64_t heads, int64_t dim_head,
+                                                     int64_t cross_attention_dim, const torch::TensorOptions& t) {
+  AttentionOptions self_attn;
+  self_attn.query_dim = dim;
+  self_attn.heads = heads;
+  self_attn.dim_head = dim_head;
+  AttentionOptions cross_attn = self_attn;
+  cross_attn.cross_attention_dim = cross_attention_dim;
+  norm1 = register_module("norm1", LayerNorm(dim, 1e-5, t));
+  attn1 = register_module("attn1", Attention(self_attn, t));
+  norm2 = register_module("norm2", LayerNorm(dim, 1e-5, t));
+  attn2 = register_module("attn2", Attention(cross_attn, t));
+  norm3 = register_module("norm3", LayerNorm(dim, 1e-5, t));
+  ff = register_module("ff", FeedForward(dim, t));
+}
+
+torch::Tensor BasicTransformerBlockImpl::forward(const torch::Tensor& x, const torch::Tensor& encoder_hidden_states) {
+  torch::Tensor h = x + attn1->forward(norm1->forward(x));
+  h = h + attn2->forward(norm2->forward(h), encoder_hidden_states);
+  return h + ff->forward(norm3->forward(h));
+}
+
+Transformer2DModelImpl::Transformer2DModelImpl(int64_t heads, int64_t dim_head, int64_t in_channels, int64_t layers,
+                                               int64_t norm_groups, int64_t cross_attention_dim,
+                                               const torch::TensorOptions& t) {
+  const int64_t inner = heads * dim_head;
+  norm = register_module("norm", GroupNorm(norm_groups, in_channels, 1e-6, t));
+  proj_in = register_module("proj_in", Conv2d(in_channels, inner, 1, 1, 0, true, t));
+  transformer_blocks = register_module("transformer_blocks", torch::nn::ModuleList());
+  for (int64_t i = 0; i < layers; ++i) {
+    blocks.push_back(BasicTransformerBlock(inner, heads, dim_head, cross_attention_dim, t));
+    transformer_blocks->push_back(blocks.back());
+  }
+  proj_out = register_module("proj_out", Conv2d(inner, in_channels, 1, 1, 0, true, t));
+}
+
+torch::Tensor Transformer2DModelImpl::forward(const torch::Tensor& x, const torch::Tensor& encoder_hidden_states) {
+  const int64_t b = x.size(0), h = x.size(2), w = x.size(3);
+  torch::Tensor tokens = proj_in->forward(norm->forward(x));
+  const int64_t inner = tokens.size(1);
+  tokens = tokens.permute({0, 2, 3, 1}).reshape({b, h * w, inner});
+  for (auto& block : blocks) tokens = block->forward(tokens, encoder_hidden_states);
+  torch::Tensor out = tokens.reshape({b, h, w, inner}).permute({0, 3, 1, 2}).contiguous();
+  return proj_out->forward(out) + x;
+}
+
+}  // namespace u3d::nn
