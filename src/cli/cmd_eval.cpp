@@ -53,11 +53,11 @@ const CommandRegistration registration{
                    "Meshes share one frame: normalize both with the GT's transform instead of each on its own");
       sub.add_option("--gt-render-fill", a->options.gt_render_fill,
                      "With --given-frame: place the GT as `unique3d render --fill F` did (reconstructions from those views)")
-          ->check(CLI::PositiveNumber);
+          ->check(number_in(0.01, 1));
       sub.add_option("--samples", a->options.surface_samples, "Surface samples per mesh for Chamfer and F-score")
           ->capture_default_str()->check(CLI::Range(size_t(100), size_t(100000000)));
       sub.add_option("--fscore-thresholds", a->options.fscore_thresholds, "F-score distance thresholds")
-          ->delimiter(',')->capture_default_str();
+          ->delimiter(',')->capture_default_str()->check(number_in(1e-6, 1));
       sub.add_option("--iou-resolution", a->options.iou_resolution, "Occupancy grid cells per axis for volume IoU")
           ->capture_default_str()->check(CLI::Range(2, 1024));
       sub.add_option("--render-resolution", a->options.appearance_options.resolution, "Pixels per side of the 24 renders")

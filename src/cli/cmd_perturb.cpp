@@ -57,7 +57,7 @@ const CommandRegistration registration{
       sub.add_option("--rotate-view", a->rotations, "VIEW:DEGREES in-plane roll (counter-clockwise), repeatable");
       sub.add_option("--scale-view", a->scales, "VIEW:FACTOR zoom about the image centre, repeatable");
       sub.add_option("--normal-noise", a->options.normal_noise, "Std. deviation of Gaussian noise per normal component")
-          ->check(CLI::Range(0.f, 10.f));
+          ->check(number_in(0, 10));
       sub.add_option("--seed", a->options.seed, "Seed of the normal noise")->capture_default_str();
       sub.add_option("--normal-space", a->normal_space, "Encoding of the input normal maps")
           ->check(CLI::IsMember({"world", "camera"}))->capture_default_str();

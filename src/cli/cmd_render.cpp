@@ -38,33 +38,34 @@ void run_render(const RenderOptions& o) {
   }
   progress(std::to_string(mesh.vertex_count()) + " vertices, " + std::to_string(mesh.face_count()) + " faces");
   if (!o.no_normalize) normalize_to_unit_box(mesh, o.fill);
-  const fs::path dir(o.out_dir);
-  ensure_directory(dir);
+  const fs::path out(o.out_dir);
 
   RenderSettings settings;
   settings.normal_space = o.normal_space == "camera" ? NormalSpace::Camera : NormalSpace::World;
   settings.smooth_normals = !o.flat;
   settings.ssaa = o.ssaa;
-  {
-    StageTimer t("rendering 4 views at " + std::to_string(o.resolution) + " px");
-    for (View v : kAllViews) {
-      RenderedView r = render_view(mesh, view_camera(v, o.resolution), settings);
-      save_image(r.rgb, dir / (std::string(view_name(v)) + "_rgb.png"));
-      save_image(r.normal, dir / (std::string(view_name(v)) + "_normal.png"));
+  write_folder_atomically(out, [&](const fs::path& dir) {
+    {
+      StageTimer t("rendering 4 views at " + std::to_string(o.resolution) + " px");
+      for (View v : kAllViews) {
+        RenderedView r = render_view(mesh, view_camera(v, o.resolution), settings);
+        save_image(r.rgb, dir / (std::string(view_name(v)) + "_rgb.png"));
+        save_image(r.normal, dir / (std::string(view_name(v)) + "_normal.png"));
+      }
     }
-  }
-  if (o.turntable > 0) {
-    StageTimer t("rendering " + std::to_string(o.turntable) + " turntable images");
-    for (int i = 0; i < o.turntable; ++i) {
-      const float azimuth = 360.f * float(i) / float(o.turntable);
-      Camera cam = orthographic_camera(orbit_direction(azimuth, o.elevation), o.resolution, o.resolution);
-      RenderedView r = render_view(mesh, cam, settings);
-      char name[32];
-      std::snprintf(name, sizeof name, "turntable_%03d.png", i);
-      save_image(r.rgb, dir / name);
+    if (o.turntable > 0) {
+      StageTimer t("rendering " + std::to_string(o.turntable) + " turntable images");
+      for (int i = 0; i < o.turntable; ++i) {
+        const float azimuth = 360.f * float(i) / float(o.turntable);
+        Camera cam = orthographic_camera(orbit_direction(azimuth, o.elevation), o.resolution, o.resolution);
+        RenderedView r = render_view(mesh, cam, settings);
+        char name[32];
+        std::snprintf(name, sizeof name, "turntable_%03d.png", i);
+        save_image(r.rgb, dir / name);
+      }
     }
-  }
-  progress("wrote renders to " + dir.string());
+  });
+  progress("wrote renders to " + out.string());
 }
 
 const CommandRegistration registration{
@@ -84,10 +85,10 @@ const CommandRegistration registration{
       sub.add_option("--turntable", o->turntable, "Also write N colour previews around the object (turntable_000.png ...)")
           ->check(CLI::Range(0, 3600));
       sub.add_option("--elevation", o->elevation, "Camera elevation of the turntable in degrees")
-          ->check(CLI::Range(-90.f, 90.f))
+          ->check(number_in(-90, 90))
           ->capture_default_str();
       sub.add_option("--fill", o->fill, "Scale so the longest bounding-box side spans [-fill, fill]")
-          ->check(CLI::Range(0.01f, 1.f))
+          ->check(number_in(0.01, 1))
           ->capture_default_str();
       sub.add_flag("--no-normalize", o->no_normalize, "Render the mesh in its own coordinates (views cover [-1, 1]^2)");
       return [o] { run_render(*o); };

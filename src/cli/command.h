@@ -3,7 +3,9 @@
 // subcommand is one new file. The setup function adds options to its CLI11 subcommand and returns the
 // action to run when the subcommand was chosen.
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <functional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -19,6 +21,21 @@ struct CommandInfo {
 };
 
 std::vector<CommandInfo>& command_registry();
+
+// Checks that an option is a number in [lo, hi]. CLI11's Range and PositiveNumber let NaN through
+// (every comparison with it is false); this rejects NaN and infinities too.
+inline CLI::Validator number_in(double lo, double hi) {
+  std::ostringstream range;
+  range << "[" << lo << ", " << hi << "]";
+  return CLI::Validator(
+      [lo, hi, bounds = range.str()](std::string& text) -> std::string {
+        double value = 0;
+        if (!CLI::detail::lexical_cast(text, value)) return "'" + text + "' is not a number";
+        if (!std::isfinite(value) || value < lo || value > hi) return "value " + text + " is not in " + bounds;
+        return {};
+      },
+      "NUMBER in " + range.str());
+}
 
 struct CommandRegistration {
   CommandRegistration(std::string name, std::string description, CommandSetup setup) {

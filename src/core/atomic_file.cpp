@@ -43,6 +43,30 @@ void ensure_directory(const fs::path& dir) {
   if (ec) throw Error("cannot create output folder " + dir.string() + ": " + ec.message());
 }
 
+void write_folder_atomically(const fs::path& dir, const std::function<void(const fs::path&)>& write) {
+  if (path_exists(dir)) {
+    ensure_directory(dir);
+    write(dir);
+    return;
+  }
+  const fs::path parent = dir.parent_path().empty() ? fs::path(".") : dir.parent_path();
+  ensure_directory(parent);
+  const fs::path tmp = parent / ("." + dir.filename().string() + ".partial" + std::to_string(getpid()));
+  std::error_code ec;
+  fs::remove_all(tmp, ec);
+  ensure_directory(tmp);
+  try {
+    write(tmp);
+    fs::rename(tmp, dir);
+  } catch (const fs::filesystem_error& e) {
+    fs::remove_all(tmp, ec);
+    throw Error("cannot write " + dir.string() + ": " + e.code().message());
+  } catch (...) {
+    fs::remove_all(tmp, ec);
+    throw;
+  }
+}
+
 bool path_exists(const fs::path& path) {
   std::error_code ec;
   const fs::file_status status = fs::status(path, ec);

@@ -1,5 +1,6 @@
 #include "io/mtl_reader.h"
 
+#include <cmath>
 #include <fstream>
 
 #include "core/error.h"
@@ -66,10 +67,13 @@ std::map<std::string, MtlEntry> read_mtl(const fs::path& path) {
     if (key == "Kd") {
       require(tokens.size() >= 4, where() + ": Kd needs three numbers");
       for (int c = 0; c < 3; ++c)
-        require(parse_number(tokens[c + 1], current->material.base_color[c]), where() + ": bad Kd value '" + std::string(tokens[c + 1]) + "'");
+        require(parse_number(tokens[c + 1], current->material.base_color[c]) &&
+                    std::isfinite(current->material.base_color[c]),
+                where() + ": bad Kd value '" + std::string(tokens[c + 1]) + "'");
     } else if (key == "d" || key == "Tr") {
       float value = 1.f;
-      require(tokens.size() >= 2 && parse_number(tokens.back(), value), where() + ": bad " + std::string(key) + " value");
+      require(tokens.size() >= 2 && parse_number(tokens.back(), value) && std::isfinite(value),
+              where() + ": bad " + std::string(key) + " value");
       current->material.base_color[3] = key == "d" ? value : 1.f - value;  // Tr is transparency = 1 - d
     } else {
       std::string_view name = texture_file_name(rest);

@@ -102,4 +102,11 @@ TEST_F(RenderCliTest, RejectsBadOptions) {
   EXPECT_NE(run((dir / "cube.obj").string() + " -o " + (dir / "out").string() + " --res 0"), 0);
   EXPECT_EQ(run((dir / "cube.obj").string() + " -o " + (dir / "out").string() + " --res 4096 --ssaa 4"), 1);
   EXPECT_NE(log().find("8192"), std::string::npos) << log();
+  // NaN passes CLI11's own range checks (every comparison with it is false).
+  for (const char* bad : {"--elevation nan", "--elevation inf", "--fill nan", "--fill 2"}) {
+    EXPECT_NE(run((dir / "cube.obj").string() + " -o " + (dir / "out").string() + " --turntable 2 " + bad), 0) << bad;
+    const std::string message = log();
+    EXPECT_TRUE(message.find("is not in [") != std::string::npos) << bad << ": " << message;
+  }
+  EXPECT_FALSE(fs::exists(dir / "out"));
 }

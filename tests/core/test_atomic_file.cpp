@@ -75,3 +75,30 @@ TEST(AtomicFile, MissingFolderIsAClearError) {
     EXPECT_NE(std::string(e.what()).find("does not exist"), std::string::npos) << e.what();
   }
 }
+
+TEST(AtomicFolder, ThrowingWriterLeavesNoFolder) {
+  const fs::path parent = fresh_dir("folder_throw");
+  EXPECT_THROW(write_folder_atomically(parent / "out",
+                                       [](const fs::path& folder) {
+                                         std::ofstream(folder / "first.png") << "x";
+                                         throw Error("second view failed");
+                                       }),
+               Error);
+  EXPECT_EQ(entries(parent), 0u);
+}
+
+TEST(AtomicFolder, NewFolderAppearsWholeAndAnExistingOneIsWrittenInPlace) {
+  const fs::path parent = fresh_dir("folder_ok");
+  write_folder_atomically(parent / "out", [&](const fs::path& folder) {
+    EXPECT_NE(folder, parent / "out");  // a temporary sibling while it is being filled
+    EXPECT_FALSE(fs::exists(parent / "out"));
+    std::ofstream(folder / "a.txt") << "a";
+  });
+  EXPECT_TRUE(fs::exists(parent / "out" / "a.txt"));
+  EXPECT_EQ(entries(parent), 1u);
+  write_folder_atomically(parent / "out", [&](const fs::path& folder) {
+    EXPECT_EQ(folder, parent / "out");
+    std::ofstream(folder / "b.txt") << "b";
+  });
+  EXPECT_EQ(entries(parent / "out"), 2u);
+}

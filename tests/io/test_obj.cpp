@@ -112,6 +112,11 @@ TEST(Obj, BadFilesGiveErrorsNamingTheProblem) {
   expect_error("nomtl.obj", "mtllib missing.mtl\nv 0 0 0\n", "missing.mtl does not exist");
   write_file(dir / "notex.mtl", "newmtl a\nmap_Kd gone.png\n");
   expect_error("notex.obj", "mtllib notex.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n", "gone.png");
+  // A material colour that is not a finite number is named where it stands, not when it is written.
+  write_file(dir / "nan.mtl", "newmtl a\nKd 0.5 nan 0.5\n");
+  expect_error("nankd.obj", "mtllib nan.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n", "nan.mtl:2: bad Kd value 'nan'");
+  write_file(dir / "inf.mtl", "newmtl a\nd inf\n");
+  expect_error("infd.obj", "mtllib inf.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n", "inf.mtl:2: bad d value");
 }
 
 TEST(Obj, FailedTextureLeavesNoFilesBehind) {
