@@ -38,7 +38,10 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    // Bad options are errors like any other: the same prefix, and status 1.
+    std::fprintf(stderr, "unique3d: error: %s\nRun with --help for more information.\n", e.what());
+    return 1;
   }
   StderrProgress progress_lines(quiet);
   ProgressScope progress_scope(&progress_lines);

@@ -36,7 +36,10 @@ Image load_image(const fs::path& path) {
   try {
     m = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
   } catch (const cv::Exception& e) {
-    throw Error("cannot decode image " + path.string() + ": " + e.what());
+    // OpenCV's own text names its source file and assertion; say what it means for the user.
+    if (e.func == "validateInputImageSize")
+      throw Error("cannot decode image " + path.string() + ": larger than the 2^30 pixels an image may have");
+    throw Error("cannot decode image " + path.string() + ": " + (e.err.empty() ? std::string(e.what()) : e.err));
   }
   if (m.empty()) throw Error("cannot decode image " + path.string() + " (corrupt or not an image file)");
   double scale = 1.0;

@@ -107,3 +107,18 @@ TEST_F(CliEval, PerturbWritesNothingWhenAnInputIsBad) {
   EXPECT_NE(loop.output.find("Too many levels of symbolic links"), std::string::npos) << loop.output;
   EXPECT_FALSE(fs::exists(dir / "out"));
 }
+
+// Option errors found by the parser (a missing argument, a path that is a symlink loop) take the same
+// form as every other error.
+TEST_F(CliEval, ParserErrorsArePrefixedAndExitWithOne) {
+  fs::create_symlink(dir / "loop.obj", dir / "loop.obj");
+  CliRun loop = run_cli("eval " + (dir / "loop.obj").string() + " " + (dir / "loop.obj").string(), dir);
+  EXPECT_EQ(loop.status, 1) << loop.output;
+  EXPECT_EQ(loop.output.rfind("unique3d: error: ", 0), 0u) << loop.output;
+  EXPECT_NE(loop.output.find("loop.obj"), std::string::npos) << loop.output;
+  CliRun missing = run_cli("eval", dir);
+  EXPECT_EQ(missing.status, 1) << missing.output;
+  EXPECT_EQ(missing.output.rfind("unique3d: error: ", 0), 0u) << missing.output;
+  CliRun help = run_cli("eval --help", dir);
+  EXPECT_EQ(help.status, 0) << help.output;
+}

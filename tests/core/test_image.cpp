@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <unistd.h>
@@ -16,6 +17,29 @@ fs::path temp_dir() {
   fs::path d = fs::temp_directory_path() / ("u3d_test_image_" + std::to_string(::getpid()));
   fs::create_directories(d);
   return d;
+}
+
+// The smallest PNG file structure with the given size in its header: IHDR (8-bit RGBA), a short IDAT
+// and IEND, with their CRCs.
+void write_png_chunks(const fs::path& path, uint32_t width, uint32_t height) {
+  auto crc32 = [](const std::string& bytes) {
+    uint32_t c = 0xffffffffu;
+    for (unsigned char b : bytes) {
+      c ^= b;
+      for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xedb88320u & (0u - (c & 1u)));
+    }
+    return c ^ 0xffffffffu;
+  };
+  auto be32 = [](uint32_t v) {
+    return std::string{char(v >> 24), char(v >> 16), char(v >> 8), char(v)};
+  };
+  auto chunk = [&](const std::string& type, const std::string& data) {
+    return be32(uint32_t(data.size())) + type + data + be32(crc32(type + data));
+  };
+  const std::string ihdr = be32(width) + be32(height) + std::string{8, 6, 0, 0, 0};
+  const std::string idat("\x78\x9c\x63\x60\x00\x00\x00\x02\x00\x01", 10);  // zlib of one zero byte
+  std::ofstream(path, std::ios::binary) << std::string("\x89PNG\r\n\x1a\n", 8) << chunk("IHDR", ihdr)
+                                        << chunk("IDAT", idat) << chunk("IEND", "");
 }
 }  // namespace
 
@@ -62,4 +86,19 @@ TEST(Image, BadInputsGiveErrors) {
   EXPECT_THROW(save_image(nan_im, d / "nan.png"), Error);
   EXPECT_FALSE(fs::exists(d / "nan.png"));
   EXPECT_THROW(save_image(Image(2, 2, 3), d / "no_such_dir" / "x.png"), Error);
+}
+
+// A PNG whose header claims 65535 x 65535 pixels: OpenCV refuses it with its raw assertion text,
+// which must not reach the user.
+TEST(Image, OversizedPngIsAnErrorInPlainWords) {
+  const fs::path path = temp_dir() / "huge.png";
+  write_png_chunks(path, 65535, 65535);
+  try {
+    load_image(path);
+    FAIL() << "accepted";
+  } catch (const Error& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("huge.png: larger than the 2^30 pixels"), std::string::npos) << message;
+    EXPECT_EQ(message.find("OpenCV"), std::string::npos) << message;
+  }
 }
