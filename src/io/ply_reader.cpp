@@ -7,6 +7,7 @@
 #include <cctype>
 #include <cstring>
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 
 #include "core/error.h"
@@ -203,7 +204,11 @@ int vertex_slot(const std::string& name) {
 
 // Casting an out-of-range double to an integer is undefined: check before every conversion.
 int to_index(double value, const std::string& file, const char* what) {
-  require(value >= 0 && value < 2147483647.0, file + ": " + what + " " + std::to_string(value) + " is out of range");
+  if (!(value >= 0 && value < 2147483647.0)) {
+    std::ostringstream text;  // shortest form: integers print without decimals
+    text << std::setprecision(17) << value;
+    throw Error(file + ": " + what + " " + text.str() + " is out of range");
+  }
   return int(value);
 }
 

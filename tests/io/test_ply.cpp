@@ -89,13 +89,17 @@ TEST(Ply, CorruptAndTruncatedFilesGiveErrors) {
   write_file(dir / "index.ply",
              "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
              "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n");
+  write_file(dir / "negative.ply",
+             "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+             "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 -1\n");
   write_file(dir / "text.ply",
              "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
              "end_header\n0 zero 0\n");
   const std::pair<const char*, const char*> cases[] = {
       {"truncated.ply", "unexpected end of data"}, {"noheader.ply", "no end_header"},
       {"magic.ply", "not a PLY file"},            {"huge.ply", "too short"},
-      {"index.ply", "references vertex 9"},       {"text.ply", "'zero' is not a number"}};
+      {"index.ply", "references vertex 9"},       {"text.ply", "'zero' is not a number"},
+      {"negative.ply", "vertex index -1 is out of range"}};  // an integer, printed as one
   for (const auto& [name, expected] : cases) {
     try {
       read_mesh(dir / name);
