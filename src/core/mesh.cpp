@@ -1,6 +1,7 @@
 #include "core/mesh.h"
 
 #include <Eigen/Geometry>  // cross()
+#include <algorithm>
 #include <cmath>
 
 #include "core/error.h"
@@ -77,8 +78,12 @@ std::vector<Vec3f> vertex_normals(const std::vector<Vec3f>& positions, const std
 Similarity normalize_to_unit_box(Mesh& mesh, float fill) {
   require(fill > 0, "fill must be positive");
   BoundingBox b = bounding_box(mesh.positions);
-  float longest = b.extent().maxCoeff();
-  require(longest > 0 && std::isfinite(longest), "cannot normalize a mesh with zero size");
+  // Near the float limit the extent and the centre overflow: such a mesh is too large, not flat.
+  const float reach = std::max(b.min.cwiseAbs().maxCoeff(), b.max.cwiseAbs().maxCoeff());
+  require(reach <= 1e30f, "cannot normalize a mesh with coordinates beyond 1e30 (it reaches " +
+                              std::to_string(double(reach)) + ")");
+  const float longest = b.extent().maxCoeff();
+  require(longest > 0, "cannot normalize a mesh with zero size");
   Similarity s;
   s.offset = -b.center();
   s.scale = 2.f * fill / longest;
