@@ -11,6 +11,26 @@ namespace u3d {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+// Fills the temporary `tmp` with write(tmp) and renames it to `target`; on any exception removes
+// `tmp` (a file or a folder) and rethrows, filesystem errors as an Error naming the target.
+void write_then_rename(const fs::path& tmp, const fs::path& target, const std::function<void(const fs::path&)>& write) {
+  std::error_code ec;
+  try {
+    write(tmp);
+    fs::rename(tmp, target);
+  } catch (const fs::filesystem_error& e) {
+    fs::remove_all(tmp, ec);
+    throw Error("cannot write " + target.string() + ": " + e.code().message());
+  } catch (...) {
+    fs::remove_all(tmp, ec);
+    throw;
+  }
+}
+
+}  // namespace
+
 void write_atomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
   fs::path dir = path.parent_path().empty() ? fs::path(".") : path.parent_path();
   std::error_code ec;
@@ -21,16 +41,7 @@ void write_atomically(const fs::path& path, const std::function<void(const fs::p
   // Keep the extension last: OpenCV and friends pick the encoder from it.
   fs::path tmp = dir / ("." + path.stem().string() + ".tmp" + std::to_string(getpid()) + "_" +
                         std::to_string(counter++) + path.extension().string());
-  try {
-    write(tmp);
-    fs::rename(tmp, path);
-  } catch (const fs::filesystem_error& e) {
-    fs::remove(tmp, ec);
-    throw Error("cannot write " + path.string() + ": " + e.code().message());
-  } catch (...) {
-    fs::remove(tmp, ec);
-    throw;
-  }
+  write_then_rename(tmp, path, write);
 }
 
 void ensure_directory(const fs::path& dir) {
@@ -55,16 +66,7 @@ void write_folder_atomically(const fs::path& dir, const std::function<void(const
   std::error_code ec;
   fs::remove_all(tmp, ec);
   ensure_directory(tmp);
-  try {
-    write(tmp);
-    fs::rename(tmp, dir);
-  } catch (const fs::filesystem_error& e) {
-    fs::remove_all(tmp, ec);
-    throw Error("cannot write " + dir.string() + ": " + e.code().message());
-  } catch (...) {
-    fs::remove_all(tmp, ec);
-    throw;
-  }
+  write_then_rename(tmp, dir, write);
 }
 
 bool path_exists(const fs::path& path) {
