@@ -59,8 +59,7 @@ bool fill_boundary_loops(Mesh& mesh, size_t& faces_removed, size_t& holes_filled
 // walk over each piece from its first face. Open3D's OrientTriangles ran before the holes were filled;
 // this states the guarantee for the final faces, which the back-face-culling renderer relies on (a
 // flipped face would vanish from its views). Edges with more than two faces do not link their faces.
-void orient_consistently(Mesh& mesh) {
-  const EdgeSideLists edges = edge_side_lists(build_edge_topology(mesh.faces, mesh.vertex_count()));
+void orient_consistently(Mesh& mesh, const EdgeSideLists& edges) {
   // Per face, its neighbours (by edge number) and whether the two agree as stored (opposite traversal).
   std::vector<std::vector<std::pair<int, bool>>> links(mesh.faces.size());
   for (size_t e = 0; e < edges.edge_count(); ++e) {
@@ -92,8 +91,7 @@ void orient_consistently(Mesh& mesh) {
 
 // OrientTriangles makes each piece consistent but may turn a piece inside out: flip every piece whose
 // enclosed volume is negative. Pieces are faces joined across every edge, non-manifold ones included.
-void orient_outward(Mesh& mesh) {
-  const EdgeSideLists edges = edge_side_lists(build_edge_topology(mesh.faces, mesh.vertex_count()));
+void orient_outward(Mesh& mesh, const EdgeSideLists& edges) {
   DisjointSets pieces(mesh.faces.size());
   for (size_t e = 0; e < edges.edge_count(); ++e)
     for (int k = edges.offsets[e] + 1; k < edges.offsets[e + 1]; ++k) pieces.unite(edges.sides[k] / 3, edges.sides[k - 1] / 3);
@@ -137,8 +135,10 @@ MeshRepairReport repair_to_closed_manifold(Mesh& mesh, int max_passes) {
       break;
     }
   }
-  orient_consistently(mesh);
-  orient_outward(mesh);
+  // Flipping faces keeps every edge and which faces meet there, so both passes share one edge list.
+  const EdgeSideLists edges = edge_side_lists(build_edge_topology(mesh.faces, mesh.vertex_count()));
+  orient_consistently(mesh, edges);
+  orient_outward(mesh, edges);
   return report;
 }
 
