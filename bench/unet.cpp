@@ -5,7 +5,10 @@
 // build/bench/bench_unet | grep blas` shows which build a run loads.
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
+#include <torch/csrc/autograd/profiler_legacy.h>
 #include <torch/torch.h>
+
+#include <memory>
 
 #include <string>
 #include <vector>
@@ -13,11 +16,15 @@
 #include "nn/checkpoint/config_json.h"
 #include "nn/layers/layers.h"
 #include "nn/models/unet.h"
+#include "nn/precision.h"
 #include "nn/runtime.h"
 
 namespace {
 
 using namespace u3d::nn;
+
+Precision g_precision = Precision::kFp32;
+std::string g_profile_path;  // --profile=FILE: a Chrome trace of the ops of every timed forward
 
 UNet2DConditionModel& full_size_unet() {
   static UNet2DConditionModel unet = [] {
@@ -27,6 +34,7 @@ UNet2DConditionModel& full_size_unet() {
                            torch::TensorOptions());
     torch::manual_seed(0);
     randomize_parameters(*m, 0.02);
+    set_precision(*m, g_precision);
     return m;
   }();
   return unet;
@@ -43,12 +51,15 @@ void BM_UNetForward(benchmark::State& state) {
   rusage before{};
   getrusage(RUSAGE_SELF, &before);
   for (auto _ : state) {
+    std::unique_ptr<torch::autograd::profiler::RecordProfile> profile;
+    if (!g_profile_path.empty()) profile = std::make_unique<torch::autograd::profiler::RecordProfile>(g_profile_path);
     torch::Tensor out = unet->forward(sample, timestep, embedding);
     benchmark::DoNotOptimize(out.data_ptr());
   }
   rusage after{};
   getrusage(RUSAGE_SELF, &after);
   state.counters["threads"] = at::get_num_threads();
+  state.SetLabel(precision_name(g_precision));
   // Page faults were a large share of the time (freed tensors handed back to the kernel); peak RSS
   // shows what keeping freed memory costs.
   state.counters["minor_faults"] = static_cast<double>(after.ru_minflt - before.ru_minflt);
@@ -72,7 +83,16 @@ int main(int argc, char** argv) {
   at::globalContext().setFlushDenormal(true);
   // By default three runs, aggregates only (the first run also pays for oneDNN's primitive set-up);
   // the same flags given on the command line come later and win.
-  std::vector<char*> args(argv, argv + argc);
+  std::vector<char*> args;
+  for (int i = 0; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg.starts_with("--dtype="))
+      g_precision = parse_precision(arg.substr(8), "--dtype");
+    else if (arg.starts_with("--profile="))
+      g_profile_path = arg.substr(10);
+    else
+      args.push_back(argv[i]);
+  }
   std::string repetitions = "--benchmark_repetitions=3", aggregates = "--benchmark_report_aggregates_only=true";
   args.insert(args.begin() + 1, {repetitions.data(), aggregates.data()});
   int arg_count = static_cast<int>(args.size());

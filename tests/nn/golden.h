@@ -40,6 +40,14 @@ inline double max_abs_diff(const torch::Tensor& a, const torch::Tensor& b) {
   return (a.to(torch::kDouble) - b.to(torch::kDouble)).abs().max().item<double>();
 }
 
+// ||a - b|| / ||b|| over all elements, in float64.
+inline double relative_error(const torch::Tensor& a, const torch::Tensor& b) {
+  EXPECT_EQ(a.sizes(), b.sizes());
+  if (a.sizes() != b.sizes()) return INFINITY;
+  const torch::Tensor ref = b.to(torch::kDouble);
+  return ((a.to(torch::kDouble) - ref).norm() / ref.norm()).item<double>();
+}
+
 // The golden README's acceptance for single fp32 forward passes.
 constexpr double kForwardTolerance = 1e-4;
 
@@ -48,6 +56,13 @@ constexpr double kForwardTolerance = 1e-4;
     double _err = ::u3d::nn::test::max_abs_diff((actual), (expected));                  \
     EXPECT_LE(_err, (tol)) << #actual << " differs from the reference by " << _err;     \
     std::printf("  [golden] %-60s max abs err %.3g\n", #expected, _err);                 \
+  } while (0)
+
+#define EXPECT_RELATIVE_TO_GOLDEN(actual, expected, tol)                                \
+  do {                                                                                  \
+    double _err = ::u3d::nn::test::relative_error((actual), (expected));                \
+    EXPECT_LE(_err, (tol)) << #actual << " differs from the reference by " << _err;     \
+    std::printf("  [golden] %-60s relative err %.3g\n", #expected, _err);               \
   } while (0)
 
 }  // namespace u3d::nn::test

@@ -27,7 +27,11 @@ GroupNormImpl::GroupNormImpl(int64_t groups_, int64_t channels, double eps_, con
   bias = register_parameter("bias", torch::empty({channels}, options), false);
 }
 
-torch::Tensor GroupNormImpl::forward(const torch::Tensor& x) { return torch::group_norm(x, groups, weight, bias, eps); }
+torch::Tensor GroupNormImpl::forward(const torch::Tensor& x) {
+  if (x.scalar_type() == weight.scalar_type()) return torch::group_norm(x, groups, weight, bias, eps);
+  // Reduced-precision activations, fp32 weights (nn/precision.h): statistics and scaling in fp32.
+  return torch::group_norm(x.to(weight.scalar_type()), groups, weight, bias, eps).to(x.scalar_type());
+}
 
 LayerNormImpl::LayerNormImpl(int64_t dim, double eps_, const torch::TensorOptions& options) : eps(eps_) {
   weight = register_parameter("weight", torch::empty({dim}, options), false);
@@ -35,7 +39,8 @@ LayerNormImpl::LayerNormImpl(int64_t dim, double eps_, const torch::TensorOption
 }
 
 torch::Tensor LayerNormImpl::forward(const torch::Tensor& x) {
-  return torch::layer_norm(x, {weight.size(0)}, weight, bias, eps);
+  if (x.scalar_type() == weight.scalar_type()) return torch::layer_norm(x, {weight.size(0)}, weight, bias, eps);
+  return torch::layer_norm(x.to(weight.scalar_type()), {weight.size(0)}, weight, bias, eps).to(x.scalar_type());
 }
 
 EmbeddingImpl::EmbeddingImpl(int64_t count, int64_t dim, const torch::TensorOptions& options) {

@@ -25,6 +25,8 @@ class Conv2dImpl : public torch::nn::Module {
 };
 TORCH_MODULE(Conv2d);
 
+// The norms compute in the dtype of their weights: fp32 weights normalise bf16/fp16 activations in
+// fp32 and return the activations' dtype (nn/precision.h).
 class GroupNormImpl : public torch::nn::Module {
  public:
   GroupNormImpl(int64_t groups, int64_t channels, double eps, const torch::TensorOptions& options);

@@ -113,16 +113,18 @@ ClipVisionOutput ClipVisionModelWithProjectionImpl::forward(const torch::Tensor&
     throw Error("CLIP vision: pixel_values must be [N, " + std::to_string(config.num_channels) + ", " +
                 std::to_string(config.image_size) + ", " + std::to_string(config.image_size) + "], got " +
                 c10::str(pixel_values.sizes()));
+  // Runs in the dtype of its weights (nn/precision.h); every output is in the dtype of pixel_values.
+  const torch::ScalarType out_type = pixel_values.scalar_type();
   ClipVisionOutput out;
   torch::Tensor h = pre_layrnorm->forward(embeddings->forward(pixel_values));
-  if (output_hidden_states) out.hidden_states.push_back(h);
+  if (output_hidden_states) out.hidden_states.push_back(h.to(out_type));
   for (auto& layer : layers) {
     h = layer->forward(h);
-    if (output_hidden_states) out.hidden_states.push_back(h);
+    if (output_hidden_states) out.hidden_states.push_back(h.to(out_type));
   }
-  out.last_hidden_state = h;
+  out.last_hidden_state = h.to(out_type);
   torch::Tensor pooled = post_layernorm->forward(h.select(1, 0));
-  out.image_embeds = visual_projection->forward(pooled);
+  out.image_embeds = visual_projection->forward(pooled).to(out_type);
   return out;
 }
 

@@ -250,6 +250,11 @@ torch::Tensor UNet2DConditionModelImpl::forward(const torch::Tensor& sample, con
   auto record = [&](const std::string& name, const torch::Tensor& value) {
     if (extras.trace) (*extras.trace)[name] = value;
   };
+  // The model runs in the dtype of its weights (nn/precision.h); inputs are cast to it and the
+  // output back to the sample's dtype.
+  const torch::ScalarType compute = conv_in->weight.scalar_type();
+  input = input.to(compute);
+  const torch::Tensor context = encoder_hidden_states.to(compute);
   record("conv_in_input", input);
 
   torch::Tensor steps = timestep.to(sample.device());
@@ -259,7 +264,7 @@ torch::Tensor UNet2DConditionModelImpl::forward(const torch::Tensor& sample, con
     steps = steps.expand({batch});
   }
   torch::Tensor t_emb = timestep_projection(steps, config.block_out_channels[0], config.flip_sin_to_cos, config.freq_shift)
-                            .to(sample.scalar_type());
+                            .to(compute);
   record("time_proj", t_emb);
   torch::Tensor emb = time_embedding->forward(t_emb);
   if (class_embedding) {
@@ -273,24 +278,24 @@ torch::Tensor UNet2DConditionModelImpl::forward(const torch::Tensor& sample, con
   record("conv_in", h);
   std::vector<torch::Tensor> skips{h};
   for (size_t i = 0; i < down_blocks.size(); ++i) {
-    h = down_blocks[i]->forward(h, emb, encoder_hidden_states, skips);
+    h = down_blocks[i]->forward(h, emb, context, skips);
     record("down_blocks." + std::to_string(i), h);
   }
   if (!extras.down_block_additional_residuals.empty()) {
     if (extras.down_block_additional_residuals.size() != skips.size())
       throw Error("UNet: " + std::to_string(extras.down_block_additional_residuals.size()) +
                   " down-block residuals given, the model has " + std::to_string(skips.size()) + " skip connections");
-    for (size_t i = 0; i < skips.size(); ++i) skips[i] = skips[i] + extras.down_block_additional_residuals[i];
+    for (size_t i = 0; i < skips.size(); ++i) skips[i] = skips[i] + extras.down_block_additional_residuals[i].to(compute);
   }
-  h = mid_block->forward(h, emb, encoder_hidden_states);
-  if (extras.mid_block_additional_residual.defined()) h = h + extras.mid_block_additional_residual;
+  h = mid_block->forward(h, emb, context);
+  if (extras.mid_block_additional_residual.defined()) h = h + extras.mid_block_additional_residual.to(compute);
   record("mid_block", h);
   for (size_t i = 0; i < up_blocks.size(); ++i) {
-    h = up_blocks[i]->forward(h, emb, encoder_hidden_states, skips);
+    h = up_blocks[i]->forward(h, emb, context, skips);
     record("up_blocks." + std::to_string(i), h);
   }
   h = torch::silu(conv_norm_out->forward(h));
-  return conv_out->forward(h);
+  return conv_out->forward(h).to(sample.scalar_type());
 }
 
 }  // namespace u3d::nn

@@ -215,7 +215,10 @@ LatentDistribution AutoencoderKLImpl::encode(const torch::Tensor& image) {
   if (image.dim() != 4 || image.size(1) != config.in_channels || image.size(2) % factor || image.size(3) % factor)
     throw Error("VAE encode: image must be [N, " + std::to_string(config.in_channels) + ", H, W] with H, W multiples of " +
                 std::to_string(factor) + ", got " + c10::str(image.sizes()));
-  auto moments = quant_conv->forward(encoder->forward(image)).chunk(2, 1);
+  // Runs in the dtype of its weights (nn/precision.h); returns the image's dtype.
+  auto moments = quant_conv->forward(encoder->forward(image.to(quant_conv->weight.scalar_type())))
+                     .to(image.scalar_type())
+                     .chunk(2, 1);
   return {moments[0], moments[1].clamp(-30.0, 20.0)};
 }
 
@@ -223,7 +226,8 @@ torch::Tensor AutoencoderKLImpl::decode(const torch::Tensor& latent) {
   if (latent.dim() != 4 || latent.size(1) != config.latent_channels)
     throw Error("VAE decode: latent must be [N, " + std::to_string(config.latent_channels) + ", h, w], got " +
                 c10::str(latent.sizes()));
-  return decoder->forward(post_quant_conv->forward(latent));
+  return decoder->forward(post_quant_conv->forward(latent.to(post_quant_conv->weight.scalar_type())))
+      .to(latent.scalar_type());
 }
 
 torch::Tensor AutoencoderKLImpl::decode_tiled(const torch::Tensor& latent, const VaeTiling& tiling) {

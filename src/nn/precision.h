@@ -1,0 +1,38 @@
+#pragma once
+// Numeric precision of a network: which floating type its weights and activations use, the default
+// for a device, and the conversion of a built model. The convention (docs/networks.md, "Precision"):
+// convolutions, linear layers, attention products and embeddings run in the model's precision;
+// GroupNorm/LayerNorm keep fp32 weights and compute in fp32 (libtorch 1.13's bf16 norms accumulate in
+// bf16: slow and inaccurate), softmax runs in fp32, and models take and return tensors in the caller's
+// dtype, so schedulers and everything outside the networks stay fp32.
+#include <torch/torch.h>
+
+#include <string>
+
+namespace u3d::nn {
+
+enum class Precision { kFp32, kBf16, kFp16 };
+
+// "fp32" | "bf16" | "fp16"; anything else is an Error naming `what` and the choices.
+Precision parse_precision(const std::string& text, const std::string& what);
+const char* precision_name(Precision precision);
+torch::ScalarType scalar_type(Precision precision);
+
+// Whether this CPU has native bf16 dot products (avx512_bf16) that oneDNN uses for bf16 convolutions
+// and matrix products. Without them libtorch emulates bf16 and is slower than fp32.
+bool cpu_has_bf16_kernels();
+
+// The precision networks run in on `device` when the user does not choose: bf16 on a CPU with
+// avx512_bf16, fp32 on other CPUs, fp16 on CUDA.
+Precision default_precision(const torch::Device& device);
+
+// An Error when `precision` cannot run on `device`: fp16 needs CUDA (libtorch 1.13 has no fp16 CPU
+// convolutions).
+void check_precision_supported(Precision precision, const torch::Device& device);
+
+// Converts every parameter and buffer of `model` to `precision`, except those of GroupNorm and
+// LayerNorm modules, which stay fp32. Done once after loading; converting back to fp32 does not
+// restore the dropped mantissa bits.
+void set_precision(torch::nn::Module& model, Precision precision);
+
+}  // namespace u3d::nn

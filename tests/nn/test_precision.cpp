@@ -1,0 +1,164 @@
+// Reduced precision (nn/precision.h): the conversion rules, and every golden network run in bf16
+// against its fp32 Python reference (issue target: relative error at most 2e-2).
+#include "nn/precision.h"
+
+#include <gtest/gtest.h>
+
+#include "golden.h"
+#include "nn/layers/attention.h"
+#include "nn/layers/multiview_attention.h"
+#include "nn/models/clip_vision.h"
+#include "nn/models/unet.h"
+#include "nn/models/vae.h"
+
+namespace u3d::nn {
+namespace {
+
+using namespace u3d::nn::test;
+
+constexpr double kBf16Tolerance = 2e-2;
+
+TEST(Precision, ParsesNamesAndRejectsOthers) {
+  EXPECT_EQ(parse_precision("fp32", "--dtype"), Precision::kFp32);
+  EXPECT_EQ(parse_precision("bf16", "--dtype"), Precision::kBf16);
+  EXPECT_EQ(parse_precision("fp16", "--dtype"), Precision::kFp16);
+  for (Precision p : {Precision::kFp32, Precision::kBf16, Precision::kFp16})
+    EXPECT_EQ(parse_precision(precision_name(p), "x"), p);
+  try {
+    parse_precision("float32", "--dtype");
+    FAIL() << "no error";
+  } catch (const u3d::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("--dtype"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("bf16"), std::string::npos);
+  }
+}
+
+TEST(Precision, Fp16NeedsCudaAndTheCpuDefaultFollowsTheInstructionSet) {
+  EXPECT_THROW(check_precision_supported(Precision::kFp16, torch::kCPU), u3d::Error);
+  EXPECT_NO_THROW(check_precision_supported(Precision::kBf16, torch::kCPU));
+  EXPECT_NO_THROW(check_precision_supported(Precision::kFp32, torch::kCPU));
+  EXPECT_EQ(default_precision(torch::kCPU), cpu_has_bf16_kernels() ? Precision::kBf16 : Precision::kFp32);
+  EXPECT_EQ(default_precision(torch::Device(torch::kCUDA, 0)), Precision::kFp16);
+}
+
+TEST(Precision, NormsKeepFp32WeightsAndEverythingElseConverts) {
+  torch::NoGradGuard no_grad;
+  auto config = UNetConfig::from_json(golden_config("unet_base"), "unet_base/config.json");
+  UNet2DConditionModel unet(config, torch::TensorOptions());
+  set_precision(*unet, Precision::kBf16);
+  size_t norms = 0, others = 0;
+  for (const auto& p : unet->named_parameters()) {
+    const bool norm = p.key().find("norm") != std::string::npos;
+    EXPECT_EQ(p.value().scalar_type(), norm ? torch::kFloat : torch::kBFloat16) << p.key();
+    (norm ? norms : others)++;
+  }
+  EXPECT_GT(norms, 0u);
+  EXPECT_GT(others, 0u);
+  // The members that forward() uses see the converted tensors.
+  EXPECT_EQ(unet->conv_in->weight.scalar_type(), torch::kBFloat16);
+  EXPECT_EQ(unet->conv_norm_out->weight.scalar_type(), torch::kFloat);
+}
+
+TEST(Precision, NormsComputeInFp32ForBf16Activations) {
+  torch::NoGradGuard no_grad;
+  torch::manual_seed(3);
+  GroupNorm group_norm(4, 16, 1e-5, torch::TensorOptions());
+  LayerNorm layer_norm(16, 1e-5, torch::TensorOptions());
+  for (auto* m : {static_cast<torch::nn::Module*>(group_norm.get()), static_cast<torch::nn::Module*>(layer_norm.get())})
+    randomize_parameters(*m, 1.0);
+  // A large common offset: variance computed in bf16 would lose it entirely.
+  torch::Tensor x = (torch::randn({2, 16, 8, 8}) + 300.0).to(torch::kBFloat16);
+  torch::Tensor gn = group_norm->forward(x);
+  EXPECT_EQ(gn.scalar_type(), torch::kBFloat16);
+  torch::Tensor gn_ref = torch::group_norm(x.to(torch::kFloat), 4, group_norm->weight, group_norm->bias, 1e-5);
+  EXPECT_TRUE(torch::equal(gn, gn_ref.to(torch::kBFloat16)));
+  torch::Tensor tokens = x.flatten(2).transpose(1, 2);
+  torch::Tensor ln = layer_norm->forward(tokens);
+  EXPECT_EQ(ln.scalar_type(), torch::kBFloat16);
+  torch::Tensor ln_ref = torch::layer_norm(tokens.to(torch::kFloat), {16}, layer_norm->weight, layer_norm->bias, 1e-5);
+  EXPECT_TRUE(torch::equal(ln, ln_ref.to(torch::kBFloat16)));
+}
+
+// The attention kernel relies on ATen's bf16 softmax computing in fp32 and rounding once.
+TEST(Precision, Bf16SoftmaxIsTheFp32SoftmaxRoundedOnce) {
+  torch::manual_seed(4);
+  torch::Tensor scores = (torch::randn({3, 37, 4096}) * 4.0).to(torch::kBFloat16);
+  torch::Tensor expected = scores.to(torch::kFloat).softmax(-1).to(torch::kBFloat16);
+  EXPECT_TRUE(torch::equal(scores.softmax(-1), expected));
+  // And so the attention result in bf16 stays close to the fp32 one.
+  torch::Tensor q = torch::randn({2, 300, 64}), k = torch::randn({2, 300, 64}), v = torch::randn({2, 300, 64});
+  torch::Tensor ref = multi_head_attention(q, k, v, 4, 0.25);
+  torch::Tensor low = multi_head_attention(q.to(torch::kBFloat16), k.to(torch::kBFloat16), v.to(torch::kBFloat16), 4, 0.25);
+  EXPECT_EQ(low.scalar_type(), torch::kBFloat16);
+  EXPECT_LT(relative_error(low, ref), 1e-2);
+}
+
+TEST(PrecisionGolden, UNetBaseInBf16) {
+  torch::NoGradGuard no_grad;
+  auto config = UNetConfig::from_json(golden_config("unet_base"), "unet_base/config.json");
+  UNet2DConditionModel unet(config, torch::TensorOptions());
+  load_golden_weights(*unet, "unet_base");
+  set_precision(*unet, Precision::kBf16);
+  auto in = golden_tensors("unet_base", "inputs");
+  auto ref = golden_tensors("unet_base", "outputs");
+  for (const char* c : {"a", "b"}) {
+    SCOPED_TRACE(c);
+    const std::string p = c;
+    torch::Tensor out = unet->forward(in[p + ".sample"], in[p + ".timestep"], in[p + ".encoder_hidden_states"]);
+    EXPECT_EQ(out.scalar_type(), torch::kFloat);
+    EXPECT_RELATIVE_TO_GOLDEN(out, ref[p + ".sample_out"], kBf16Tolerance);
+  }
+}
+
+TEST(PrecisionGolden, MultiViewUNetInBf16) {
+  torch::NoGradGuard no_grad;
+  auto config = UNetConfig::from_json(golden_config("unet_mv"), "unet_mv/config.json");
+  UNet2DConditionModel unet(config, torch::TensorOptions());
+  load_golden_weights(*unet, "unet_mv");
+  set_precision(*unet, Precision::kBf16);
+  set_attention_processors(*unet, self_attention_only(std::make_shared<MultiViewAttentionProcessor>(4)));
+  auto in = golden_tensors("unet_mv", "inputs");
+  auto ref = golden_tensors("unet_mv", "outputs");
+  UNetExtras extras;
+  extras.class_labels = in["class_labels"];
+  extras.condition_latents = in["condition_latents"];
+  torch::Tensor out = unet->forward(in["sample"], in["timestep"], in["encoder_hidden_states"], extras);
+  EXPECT_EQ(out.scalar_type(), torch::kFloat);
+  EXPECT_RELATIVE_TO_GOLDEN(out, ref["sample_out"], kBf16Tolerance);
+}
+
+TEST(PrecisionGolden, VaeInBf16) {
+  torch::NoGradGuard no_grad;
+  auto config = AutoencoderKLConfig::from_json(golden_config("vae"), "vae/config.json");
+  AutoencoderKL vae(config, torch::TensorOptions());
+  load_golden_weights(*vae, "vae");
+  set_precision(*vae, Precision::kBf16);
+  auto in = golden_tensors("vae", "inputs");
+  auto ref = golden_tensors("vae", "outputs");
+  LatentDistribution dist = vae->encode(in["image"]);
+  EXPECT_EQ(dist.mean.scalar_type(), torch::kFloat);
+  EXPECT_RELATIVE_TO_GOLDEN(dist.mean, ref["latent_mean"], kBf16Tolerance);
+  EXPECT_RELATIVE_TO_GOLDEN(dist.logvar, ref["latent_logvar"], kBf16Tolerance);
+  torch::Tensor decoded = vae->decode(in["latent"]);
+  EXPECT_EQ(decoded.scalar_type(), torch::kFloat);
+  EXPECT_RELATIVE_TO_GOLDEN(decoded, ref["decoded"], kBf16Tolerance);
+}
+
+TEST(PrecisionGolden, ClipVisionInBf16) {
+  torch::NoGradGuard no_grad;
+  auto config = ClipVisionConfig::from_json(golden_config("clip_vision"), "clip_vision/config.json");
+  ClipVisionModelWithProjection model(config, torch::TensorOptions());
+  load_golden_weights(*model, "clip_vision", clip_policy());
+  set_precision(*model, Precision::kBf16);
+  auto in = golden_tensors("clip_vision", "inputs");
+  auto ref = golden_tensors("clip_vision", "outputs");
+  ClipVisionOutput out = model->forward(in["pixel_values"], true);
+  EXPECT_EQ(out.image_embeds.scalar_type(), torch::kFloat);
+  EXPECT_RELATIVE_TO_GOLDEN(out.image_embeds, ref["image_embeds"], kBf16Tolerance);
+  EXPECT_RELATIVE_TO_GOLDEN(out.last_hidden_state, ref["last_hidden_state"], kBf16Tolerance);
+  for (size_t i = 0; i < out.hidden_states.size(); ++i)
+    EXPECT_RELATIVE_TO_GOLDEN(out.hidden_states[i], ref["hidden_states." + std::to_string(i)], kBf16Tolerance);
+}
+
+}  // namespace
+}  // namespace u3d::nn
