@@ -1,5 +1,8 @@
 #include "nn/layers/attention.h"
 
+#include <ATen/Parallel.h>
+#include <ATen/ThreadLocalState.h>
+
 #include <algorithm>
 #include <cmath>
 #include <utility>
@@ -38,15 +41,24 @@ torch::Tensor multi_head_attention(const torch::Tensor& q, const torch::Tensor& 
   torch::Tensor kt = split_heads(k, heads).transpose(1, 2);
   torch::Tensor vh = split_heads(v, heads);
   const int64_t bh = qh.size(0), lq = qh.size(1), lk = kt.size(2);
-  const int64_t chunk = std::clamp<int64_t>(score_budget / std::max<int64_t>(bh * lk, 1), 1, std::max<int64_t>(lq, 1));
-  if (chunk >= lq) return merge_heads(torch::bmm(softmax_fp32(torch::bmm(qh, kt)), vh), heads);
+  if (bh * lq * lk <= score_budget) return merge_heads(torch::bmm(softmax_fp32(torch::bmm(qh, kt)), vh), heads);
 
+  // Blocks of one head's queries whose scores stay within the budget (and so in the core's cache),
+  // spread over the threads; each block's products and softmax run single-threaded inside it.
+  const int64_t chunk = std::clamp<int64_t>(score_budget / std::max<int64_t>(lk, 1), 1, std::max<int64_t>(lq, 1));
+  const int64_t blocks_per_head = (lq + chunk - 1) / chunk;
   torch::Tensor out = torch::empty({bh, lq, vh.size(2)}, vh.options());
-  for (int64_t start = 0; start < lq; start += chunk) {
-    const int64_t n = std::min(chunk, lq - start);
-    torch::Tensor probs = softmax_fp32(torch::bmm(qh.narrow(1, start, n), kt));
-    out.narrow(1, start, n).copy_(torch::bmm(probs, vh));
-  }
+  const at::ThreadLocalState caller_state;  // inference mode and grad mode for the worker threads
+  at::parallel_for(0, bh * blocks_per_head, 1, [&](int64_t begin, int64_t end) {
+    at::ThreadLocalStateGuard state_guard(caller_state);
+    for (int64_t block = begin; block < end; ++block) {
+      const int64_t head = block / blocks_per_head, start = (block % blocks_per_head) * chunk;
+      const int64_t n = std::min(chunk, lq - start);
+      torch::Tensor probs = softmax_fp32(torch::mm(qh[head].narrow(0, start, n), kt[head]));
+      torch::Tensor target = out[head].narrow(0, start, n);
+      torch::mm_out(target, probs, vh[head]);
+    }
+  });
   return merge_heads(out, heads);
 }
 

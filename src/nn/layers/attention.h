@@ -30,11 +30,11 @@ namespace u3d::nn {
 
 // q [B, Lq, H*D], k and v [B, Lk, H*D] -> [B, Lq, H*D]. `scale` multiplies q before the product (same
 // math as diffusers' alpha on q·kᵀ, and it never uses baddbmm, whose beta=0 path returns NaN on CPU in
-// libtorch 1.13). The softmax runs in fp32 for fp16/bf16 inputs (in the input dtype otherwise). Queries are processed in chunks so
-// the score matrix of one chunk stays within a fixed budget: 4096-token self-attention never
-// materialises B·H·4096·4096 scores at once.
-// score_budget: score elements computed per chunk (about 64 MB of fp32 by default).
-constexpr int64_t kDefaultAttentionScoreBudget = int64_t{1} << 24;
+// libtorch 1.13). The softmax computes in fp32 for fp16/bf16 inputs and returns their dtype. When all
+// B·H·Lq·Lk scores exceed `score_budget` elements, the queries of each head go in blocks of at most
+// that many scores, one block per thread at a time: long self-attention never materialises its full
+// score matrix, and a block's scores stay in the core's cache between the two products.
+constexpr int64_t kDefaultAttentionScoreBudget = int64_t{1} << 17;
 torch::Tensor multi_head_attention(const torch::Tensor& q, const torch::Tensor& k, const torch::Tensor& v,
                                    int64_t heads, double scale,
                                    int64_t score_budget = kDefaultAttentionScoreBudget);
