@@ -1,13 +1,19 @@
-// Full-size sd-image-variations UNet forward (860M parameters, random weights), fp32 on the CPU with
-// every core: batch 8 at 32x32 latents and batch 2 at 64x64. Reports the median of a few runs (wall time)
-// and the process CPU time of all threads.
-// Matrix products run in the OpenMP build of OpenBLAS (see the RPATH note in CMakeLists.txt); `ldd
+// Full-size sd-image-variations UNet forward (860M parameters, random weights) on the CPU with every
+// core: batch 8 at 32x32 latents (a multi-view step) and batch 2 at 64x64 (a normal-map step). Reports
+// the median of a few runs (wall time), the process CPU time of all threads and peak RSS.
+//   --dtype=fp32|bf16   precision of the model (nn/precision.h); default fp32
+//   --check             build in fp32, keep each case's fp32 output, convert, and report rel_err_vs_fp32
+//                       (||out - fp32|| / ||fp32||); peak RSS then includes the fp32 model
+//   --profile=FILE      write a Chrome trace of the ATen ops of the timed forwards
+// bench/unet_reference.py times the same cases with diffusers for comparison.
+// fp32 matrix products run in the OpenMP build of OpenBLAS (see the RPATH note in CMakeLists.txt); `ldd
 // build/bench/bench_unet | grep blas` shows which build a run loads.
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
 #include <torch/csrc/autograd/profiler_legacy.h>
 #include <torch/torch.h>
 
+#include <map>
 #include <memory>
 
 #include <string>
@@ -25,35 +31,64 @@ using namespace u3d::nn;
 
 Precision g_precision = Precision::kFp32;
 std::string g_profile_path;  // --profile=FILE: a Chrome trace of the ops of every timed forward
+bool g_check = false;        // --check: also run the fp32 model and report the relative error against it
 
-UNet2DConditionModel& full_size_unet() {
-  static UNet2DConditionModel unet = [] {
-    auto manifest = read_json_file(std::string(UNIQUE3D_SOURCE_DIR) +
-                                   "/tests/data/nn/manifests/unet_sd_image_variations_plain.json");
-    UNet2DConditionModel m(UNetConfig::from_json(manifest.at("constructor_config"), "unet manifest"),
-                           torch::TensorOptions());
-    torch::manual_seed(0);
-    randomize_parameters(*m, 0.02);
+struct Case {
+  torch::Tensor sample, embedding, timestep, fp32_output;
+};
+
+Case make_case(int64_t batch, int64_t size) {
+  torch::manual_seed(1);
+  return {torch::randn({batch, 4, size, size}), torch::randn({batch, 1, 768}), torch::tensor(500.0f), {}};
+}
+
+UNet2DConditionModel build_unet(torch::ScalarType type) {
+  auto manifest =
+      read_json_file(std::string(UNIQUE3D_SOURCE_DIR) + "/tests/data/nn/manifests/unet_sd_image_variations_plain.json");
+  UNet2DConditionModel m(UNetConfig::from_json(manifest.at("constructor_config"), "unet manifest"),
+                         torch::TensorOptions().dtype(type));
+  torch::manual_seed(0);
+  randomize_parameters(*m, 0.02);
+  return m;
+}
+
+// The model in the chosen precision. Without --check it is built in that precision (so peak RSS is what
+// a run in that precision needs); with --check it is built in fp32, run on every case for the
+// reference output, then converted.
+UNet2DConditionModel& full_size_unet(std::map<int64_t, Case>& cases) {
+  static UNet2DConditionModel unet = [&cases] {
+    c10::InferenceMode inference;
+    if (!g_check) {
+      UNet2DConditionModel m = build_unet(scalar_type(g_precision));
+      set_precision(*m, g_precision);
+      return m;
+    }
+    UNet2DConditionModel m = build_unet(torch::kFloat);
+    for (auto& [key, c] : cases) c.fp32_output = m->forward(c.sample, c.timestep, c.embedding);
     set_precision(*m, g_precision);
     return m;
   }();
   return unet;
 }
 
+std::map<int64_t, Case>& all_cases() {
+  static std::map<int64_t, Case> cases{{8 * 1000 + 32, make_case(8, 32)}, {2 * 1000 + 64, make_case(2, 64)}};
+  return cases;
+}
+
 void BM_UNetForward(benchmark::State& state) {
   c10::InferenceMode inference;
   const int64_t batch = state.range(0), size = state.range(1);
-  UNet2DConditionModel& unet = full_size_unet();
-  torch::manual_seed(1);
-  torch::Tensor sample = torch::randn({batch, 4, size, size});
-  torch::Tensor embedding = torch::randn({batch, 1, 768});
-  torch::Tensor timestep = torch::tensor(500.0f);
+  auto& cases = all_cases();
+  UNet2DConditionModel& unet = full_size_unet(cases);
+  const Case& c = cases.at(batch * 1000 + size);
   rusage before{};
   getrusage(RUSAGE_SELF, &before);
+  torch::Tensor out;
   for (auto _ : state) {
     std::unique_ptr<torch::autograd::profiler::RecordProfile> profile;
     if (!g_profile_path.empty()) profile = std::make_unique<torch::autograd::profiler::RecordProfile>(g_profile_path);
-    torch::Tensor out = unet->forward(sample, timestep, embedding);
+    out = unet->forward(c.sample, c.timestep, c.embedding);
     benchmark::DoNotOptimize(out.data_ptr());
   }
   rusage after{};
@@ -64,6 +99,10 @@ void BM_UNetForward(benchmark::State& state) {
   // shows what keeping freed memory costs.
   state.counters["minor_faults"] = static_cast<double>(after.ru_minflt - before.ru_minflt);
   state.counters["peak_rss_GB"] = static_cast<double>(after.ru_maxrss) / (1024.0 * 1024.0);
+  if (c.fp32_output.defined()) {
+    const torch::Tensor ref = c.fp32_output.to(torch::kDouble);
+    state.counters["rel_err_vs_fp32"] = ((out.to(torch::kDouble) - ref).norm() / ref.norm()).item<double>();
+  }
 }
 
 BENCHMARK(BM_UNetForward)
@@ -88,6 +127,8 @@ int main(int argc, char** argv) {
     const std::string arg = argv[i];
     if (arg.starts_with("--dtype="))
       g_precision = parse_precision(arg.substr(8), "--dtype");
+    else if (arg == "--check")
+      g_check = true;
     else if (arg.starts_with("--profile="))
       g_profile_path = arg.substr(10);
     else

@@ -53,9 +53,10 @@ void check_precision_supported(Precision precision, const torch::Device& device)
 
 void set_precision(torch::nn::Module& model, Precision precision) {
   torch::NoGradGuard no_grad;
-  const torch::ScalarType type = scalar_type(precision);
+  const torch::ScalarType model_type = scalar_type(precision);
   for (const auto& module : model.modules(/*include_self=*/true)) {
-    if (dynamic_cast<GroupNormImpl*>(module.get()) || dynamic_cast<LayerNormImpl*>(module.get())) continue;
+    const bool norm = dynamic_cast<GroupNormImpl*>(module.get()) || dynamic_cast<LayerNormImpl*>(module.get());
+    const torch::ScalarType type = norm ? torch::kFloat : model_type;
     for (auto& p : module->named_parameters(/*recurse=*/false))
       if (p.value().is_floating_point()) p.value().set_data(p.value().to(type));
     for (auto& b : module->named_buffers(/*recurse=*/false))

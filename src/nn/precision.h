@@ -30,8 +30,8 @@ Precision default_precision(const torch::Device& device);
 // convolutions).
 void check_precision_supported(Precision precision, const torch::Device& device);
 
-// Converts every parameter and buffer of `model` to `precision`, except those of GroupNorm and
-// LayerNorm modules, which stay fp32. Done once after loading; converting back to fp32 does not
+// Converts every floating parameter and buffer of `model` to `precision`, except those of GroupNorm
+// and LayerNorm modules, which become fp32. Done once after loading; converting back to fp32 does not
 // restore the dropped mantissa bits.
 void set_precision(torch::nn::Module& model, Precision precision);
 
