@@ -9,6 +9,7 @@
 #include "golden.h"
 #include "nn/models/clip_vision.h"
 #include "nn/models/unet.h"
+#include "nn/models/unet_reference.h"
 #include "nn/models/vae.h"
 
 namespace u3d::nn {
@@ -49,6 +50,16 @@ TEST(Manifests, UNetSdImageVariations) {
   auto m = manifest("unet_sd_image_variations_plain");
   UNet2DConditionModel unet(UNetConfig::from_json(m.at("constructor_config"), "manifest"), kMeta);
   Shapes shapes = module_shapes(*unet);
+  EXPECT_EQ(shapes.size(), m.at("num_tensors").get<size_t>());
+  expect_same_shapes(shapes, manifest_shapes(m));
+}
+
+// The official ckpt/image2normal/unet_state_dict.pth layout: the main UNet, its crosspond_attention
+// projections on every attn1, and the reference UNet under "ref_unet.".
+TEST(Manifests, UNetUnique3DImage2Normal) {
+  auto m = manifest("unet_unique3d_image2normal");
+  ReferenceUNet model(UNetConfig::from_json(m.at("constructor_config"), "manifest"), kMeta);
+  Shapes shapes = module_shapes(*model.unet);
   EXPECT_EQ(shapes.size(), m.at("num_tensors").get<size_t>());
   expect_same_shapes(shapes, manifest_shapes(m));
 }

@@ -9,9 +9,9 @@
 // is an AttentionProcessor subclass that set_attention_processors() puts on the modules a chooser
 // picks by their dotted names in the model, as diffusers' set_attn_processor does with its dict:
 //  - Unique3D's multi-view self-attention (nn/layers/multiview_attention.h) on every attn1;
-//  - reference attention: a "write" processor on the reference UNet's attn1 modules records its input
-//    tokens in a store under the module's name, and a "read" processor on the main UNet's attn1
-//    modules, sharing that store, attends over cat(own tokens, recorded tokens) with attend(x, kv);
+//  - reference attention (nn/layers/reference_attention.h): a "write" processor on the reference UNet's
+//    attn1 modules records its input tokens in a store under the module's name, and a "read" processor
+//    on the main UNet's attn1 modules, sharing that store, adds an attention over the recorded tokens;
 //  - IP-Adapter: a processor on attn2 that owns to_k_ip / to_v_ip (sized from the module the chooser
 //    is given), splits the trailing image tokens off the context and adds their attention to the
 //    text attention.
