@@ -1,0 +1,107 @@
+#include "nn/pipelines/image_diffusion.h"
+
+#include <string>
+
+#include "core/error.h"
+#include "core/progress.h"
+#include "nn/preprocess/pil_resize.h"
+
+namespace u3d::nn {
+
+namespace {
+
+void check_rgb(const torch::Tensor& image) {
+  if (image.dim() != 3 || image.size(2) != 3 || image.scalar_type() != torch::kUInt8 || image.size(0) == 0 ||
+      image.size(1) == 0)
+    throw Error("image diffusion: condition images must be uint8 RGB [H, W, 3], got " + c10::str(image.sizes()) + " " +
+                c10::toString(image.scalar_type()));
+}
+
+// VaeImageProcessor.preprocess: Pillow Lanczos resize, uint8 -> [-1, 1], NCHW.
+torch::Tensor vae_preprocess(const torch::Tensor& rgb, int64_t width, int64_t height) {
+  torch::Tensor resized = pil_resize(rgb, width, height, PilFilter::Lanczos);
+  return (resized.to(torch::kFloat) / 255.0f * 2.0f - 1.0f).permute({2, 0, 1}).unsqueeze(0);
+}
+
+}  // namespace
+
+torch::Tensor run_image_diffusion(const ImageDiffusionModels& models, const std::vector<torch::Tensor>& condition_images,
+                                  const ImageDiffusionSettings& s, NoiseSource& noise, TensorMap* trace) {
+  auto record = [trace](const std::string& name, const torch::Tensor& value) {
+    if (trace) (*trace)[name] = value;
+  };
+  const int64_t factor = models.vae->config.scale_factor();
+  if (condition_images.empty()) throw Error("image diffusion: no condition image");
+  for (const auto& image : condition_images) check_rgb(image);
+  for (int64_t side : {s.width, s.height, s.condition_width, s.condition_height})
+    if (side <= 0 || side % factor != 0)
+      throw Error("image diffusion: image sizes must be positive multiples of " + std::to_string(factor) + ", got " +
+                  std::to_string(side));
+  if (s.images_per_condition < 1 || s.steps < 1)
+    throw Error("image diffusion: images_per_condition and steps must be at least 1");
+  const bool guidance = s.guidance_scale > 1.0;
+  const int64_t batch = static_cast<int64_t>(condition_images.size()) * s.images_per_condition;
+
+  // 1. Image embeddings, each repeated for its outputs.
+  std::vector<torch::Tensor> pixels;
+  for (const auto& image : condition_images) pixels.push_back(models.feature_extractor.pixel_values(image));
+  const torch::Tensor pixel_values = torch::cat(pixels);
+  record("clip_pixel_values", pixel_values);
+  torch::Tensor embeddings =
+      models.image_encoder->forward(pixel_values).image_embeds.unsqueeze(1).repeat_interleave(s.images_per_condition, 0);
+  if (guidance) embeddings = torch::cat({torch::zeros_like(embeddings), embeddings});
+  record("image_embeddings", embeddings);
+
+  // 2. Condition latents.
+  std::vector<torch::Tensor> preprocessed;
+  for (const auto& image : condition_images)
+    preprocessed.push_back(vae_preprocess(image, s.condition_width, s.condition_height));
+  torch::Tensor condition = models.vae->encode(torch::cat(preprocessed)).mode() * models.vae->config.scaling_factor;
+  record("cond_latents", condition);
+  if (guidance) condition = torch::cat({torch::zeros_like(condition), condition});
+
+  // 3. The sampling loop.
+  Scheduler& scheduler = models.scheduler;
+  scheduler.set_timesteps(s.steps);
+  record("timesteps", scheduler.timesteps());
+  const std::vector<int64_t> latent_shape{batch, models.vae->config.latent_channels, s.height / factor, s.width / factor};
+  torch::Tensor latents = s.initial_latents.defined() ? s.initial_latents : noise.randn(latent_shape);
+  if (latents.sizes() != at::IntArrayRef(latent_shape))
+    throw Error("image diffusion: initial latents must be " + c10::str(at::IntArrayRef(latent_shape)) + ", got " +
+                c10::str(latents.sizes()));
+  latents = latents * scheduler.init_noise_sigma();
+  for (int i = 0; i < scheduler.num_steps(); ++i) {
+    const std::string step = "step" + std::to_string(i);
+    torch::Tensor input = scheduler.scale_model_input(guidance ? torch::cat({latents, latents}) : latents, i);
+    const torch::Tensor t = scheduler.timestep(i);
+    torch::Tensor prediction = models.denoiser(input, t, embeddings, condition);
+    if (trace) {
+      record(step + ".unet.latent_model_input", input);
+      record(step + ".unet.timestep", t);
+      record(step + ".unet.encoder_hidden_states", embeddings);
+      record(step + ".unet.condition_latents", condition);
+      record(step + ".unet.noise_pred_raw", prediction);
+    }
+    if (guidance) {
+      auto halves = prediction.chunk(2);
+      prediction = halves[0] + s.guidance_scale * (halves[1] - halves[0]);
+    }
+    SchedulerStep next = scheduler.step(prediction, i, latents, noise);
+    if (trace) {
+      record(step + ".scheduler.model_output", prediction);
+      record(step + ".scheduler.sample", latents);
+      record(step + ".scheduler.prev_sample", next.prev_sample);
+      record(step + ".scheduler.pred_original_sample", next.pred_original_sample);
+    }
+    latents = next.prev_sample;
+    progress_step("denoise", i + 1, scheduler.num_steps());
+  }
+
+  // 4. Decode.
+  torch::Tensor images = models.vae->decode(latents / models.vae->config.scaling_factor);
+  images = (images / 2 + 0.5).clamp(0, 1).permute({0, 2, 3, 1}).contiguous();
+  record("images", images);
+  return images;
+}
+
+}  // namespace u3d::nn
