@@ -6,12 +6,16 @@
 #include "cli/command.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/progress.h"
 #include "eval/eval_report.h"
 #include "eval/evaluate.h"
 #include "io/mesh_io.h"
 
 namespace u3d::cli {
 namespace {
+
+// Above this --iou-resolution the occupancy grid takes minutes (1024: about 10^9 cells).
+constexpr int kSlowIouResolution = 256;
 
 struct EvalArgs {
   std::string pred_path, gt_path, json_path, save_renders;
@@ -21,6 +25,11 @@ struct EvalArgs {
 };
 
 void run_eval(const EvalArgs& a) {
+  if (a.options.iou_resolution > kSlowIouResolution)
+    progress("note: --iou-resolution " + std::to_string(a.options.iou_resolution) + " classifies " +
+             std::to_string(static_cast<long long>(a.options.iou_resolution) * a.options.iou_resolution *
+                            a.options.iou_resolution) +
+             " grid cells per mesh; above " + std::to_string(kSlowIouResolution) + " this takes minutes");
   Mesh pred = read_mesh(a.pred_path);
   Mesh gt = read_mesh(a.gt_path);
   EvalOptions options = a.options;
@@ -58,7 +67,7 @@ const CommandRegistration registration{
           ->capture_default_str()->check(CLI::Range(size_t(100), size_t(100000000)));
       sub.add_option("--fscore-thresholds", a->options.fscore_thresholds, "F-score distance thresholds")
           ->delimiter(',')->capture_default_str()->check(number_in(1e-6, 1));
-      sub.add_option("--iou-resolution", a->options.iou_resolution, "Occupancy grid cells per axis for volume IoU")
+      sub.add_option("--iou-resolution", a->options.iou_resolution, "Occupancy grid cells per axis for volume IoU (cost grows with its cube: above 256 it takes minutes)")
           ->capture_default_str()->check(CLI::Range(2, 1024));
       sub.add_option("--render-resolution", a->options.appearance_options.resolution, "Pixels per side of the 24 renders")
           ->capture_default_str()->check(CLI::Range(16, 4096));

@@ -21,9 +21,9 @@ struct CliRun {
   std::string output;
 };
 
-CliRun run_cli(const std::string& args, const fs::path& dir) {
+CliRun run_cli(const std::string& args, const fs::path& dir, bool quiet = true) {
   fs::path log = dir / "cli_output.txt";
-  std::string cmd = std::string(UNIQUE3D_CLI) + " --quiet " + args + " > " + log.string() + " 2>&1";
+  std::string cmd = std::string(UNIQUE3D_CLI) + (quiet ? " --quiet " : " ") + args + " > " + log.string() + " 2>&1";
   int raw = std::system(cmd.c_str());
   std::ifstream f(log);
   std::stringstream ss;
@@ -60,6 +60,17 @@ TEST_F(CliEval, IdenticalMeshesWriteAPerfectJsonReport) {
   EXPECT_EQ(j["volume_iou"]["resolution"].get<int>(), 16);
   for (const auto& e : fs::directory_iterator(dir))  // no temporary left behind
     EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
+}
+
+// A grid of 10^9 cells (--iou-resolution 1024) runs for minutes: the user is told before it starts.
+TEST_F(CliEval, LargeIouGridsAreAnnounced) {
+  std::ofstream(dir / "empty.obj") << "# no geometry\n";
+  const std::string meshes = (dir / "empty.obj").string() + " " + (dir / "empty.obj").string();
+  CliRun large = run_cli("eval " + meshes + " --iou-resolution 1024", dir, /*quiet=*/false);
+  EXPECT_NE(large.output.find("note: --iou-resolution 1024 classifies 1073741824 grid cells"), std::string::npos)
+      << large.output;
+  CliRun small = run_cli("eval " + meshes + " --iou-resolution 64", dir, /*quiet=*/false);
+  EXPECT_EQ(small.output.find("note:"), std::string::npos) << small.output;
 }
 
 TEST_F(CliEval, EmptyOrMissingMeshesFailWithAMessage) {

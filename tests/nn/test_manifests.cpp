@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "golden.h"
+#include "nn/layers/multiview_attention.h"
 #include "nn/models/clip_vision.h"
 #include "nn/models/unet.h"
 #include "nn/models/unet_reference.h"
@@ -49,6 +50,17 @@ const torch::TensorOptions kMeta = torch::TensorOptions().device(torch::kMeta);
 TEST(Manifests, UNetSdImageVariations) {
   auto m = manifest("unet_sd_image_variations_plain");
   UNet2DConditionModel unet(UNetConfig::from_json(m.at("constructor_config"), "manifest"), kMeta);
+  Shapes shapes = module_shapes(*unet);
+  EXPECT_EQ(shapes.size(), m.at("num_tensors").get<size_t>());
+  expect_same_shapes(shapes, manifest_shapes(m));
+}
+
+// The official ckpt/img2mvimg/unet_state_dict.pth: the plain UNet with an 8-channel conv_in and a class
+// embedding; the multi-view processors add no parameters.
+TEST(Manifests, UNetUnique3DImg2MvImg) {
+  auto m = manifest("unet_unique3d_img2mvimg");
+  UNet2DConditionModel unet(UNetConfig::from_json(m.at("constructor_config"), "manifest"), kMeta);
+  set_attention_processors(*unet, self_attention_only(std::make_shared<MultiViewAttentionProcessor>(4)));
   Shapes shapes = module_shapes(*unet);
   EXPECT_EQ(shapes.size(), m.at("num_tensors").get<size_t>());
   expect_same_shapes(shapes, manifest_shapes(m));
