@@ -1,7 +1,8 @@
 // Full-size sd-image-variations UNet forward (860M parameters, random weights) on the CPU with every
 // core: batch 8 at 32x32 latents (a multi-view step) and batch 2 at 64x64 (a normal-map step). Reports
 // the median of a few runs (wall time), the process CPU time of all threads and peak RSS.
-//   --dtype=fp32|bf16   precision of the model (nn/precision.h); default fp32
+//   --dtype=fp32|bf16   precision of the model (nn/precision.h); without it both run, each in a child
+//                       process (bf16 only on CPUs with avx512_bf16)
 //   --check             build in fp32, keep each case's fp32 output, convert, and report rel_err_vs_fp32
 //                       (||out - fp32|| / ||fp32||); peak RSS then includes the fp32 model
 //   --profile=FILE      write a Chrome trace of the ATen ops of the timed forwards
@@ -13,12 +14,15 @@
 #include <torch/csrc/autograd/profiler_legacy.h>
 #include <torch/torch.h>
 
+#include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <memory>
 
 #include <string>
 #include <vector>
 
+#include "core/error.h"
 #include "nn/checkpoint/config_json.h"
 #include "nn/layers/layers.h"
 #include "nn/models/unet.h"
@@ -123,16 +127,36 @@ int main(int argc, char** argv) {
   // By default three runs, aggregates only (the first run also pays for oneDNN's primitive set-up);
   // the same flags given on the command line come later and win.
   std::vector<char*> args;
+  bool dtype_given = false;
   for (int i = 0; i < argc; ++i) {
     const std::string arg = argv[i];
-    if (arg.starts_with("--dtype="))
-      g_precision = parse_precision(arg.substr(8), "--dtype");
-    else if (arg == "--check")
+    if (arg.starts_with("--dtype=")) {
+      try {
+        g_precision = parse_precision(arg.substr(8), "--dtype");
+      } catch (const u3d::Error& e) {
+        std::fprintf(stderr, "bench_unet: %s\n", e.what());
+        return 1;
+      }
+      dtype_given = true;
+    } else if (arg == "--check") {
       g_check = true;
-    else if (arg.starts_with("--profile="))
+    } else if (arg.starts_with("--profile=")) {
       g_profile_path = arg.substr(10);
-    else
+    } else {
       args.push_back(argv[i]);
+    }
+  }
+  if (!dtype_given) {
+    // Both precisions, each in its own process so that its peak RSS is its own (bf16 only where the
+    // CPU has the instructions; elsewhere it is emulated and slower than fp32).
+    std::string rest;
+    for (int i = 1; i < argc; ++i) rest += std::string(" '") + argv[i] + "'";
+    int status = 0;
+    for (Precision p : {Precision::kFp32, Precision::kBf16}) {
+      if (p == Precision::kBf16 && !cpu_has_bf16_kernels()) continue;
+      status |= std::system((std::string("'") + argv[0] + "' --dtype=" + precision_name(p) + rest).c_str());
+    }
+    return status == 0 ? 0 : 1;
   }
   std::string repetitions = "--benchmark_repetitions=3", aggregates = "--benchmark_report_aggregates_only=true";
   args.insert(args.begin() + 1, {repetitions.data(), aggregates.data()});
