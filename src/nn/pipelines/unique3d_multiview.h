@@ -1,0 +1,51 @@
+#pragma once
+// Unique3D's image-to-four-views stage, loaded from the official checkpoint folder ckpt/img2mvimg (a
+// diffusers folder of sd-image-variations plus unet_state_dict.pth, see nn/checkpoint/diffusers_folder.h)
+// and run as the official app runs it (app/custom_models/mvimg_prediction.py with image2mvimage.yaml):
+// the UNet of unet/config.json with 8 input channels (the condition latents are concatenated) and 8
+// class embeddings, its weights from unet_state_dict.pth; joint attention over the 4 views on every
+// attn1; class labels 0..3; EulerAncestral built from scheduler/scheduler_config.json; CLIP and VAE from
+// their sub-folders. Defaults are the app's: 256 px views and condition, 30 steps, guidance 1.5.
+#include <torch/torch.h>
+
+#include <filesystem>
+#include <memory>
+
+#include "nn/checkpoint/tensor_map.h"
+#include "nn/models/clip_vision.h"
+#include "nn/models/unet.h"
+#include "nn/models/vae.h"
+#include "nn/pipelines/image_diffusion.h"
+#include "nn/precision.h"
+#include "nn/preprocess/clip_image_processor.h"
+#include "nn/schedulers/noise_source.h"
+#include "nn/schedulers/scheduler.h"
+
+namespace u3d::nn {
+
+struct MultiViewSettings {
+  int64_t size = 256;  // side of each view and of the encoded condition
+  int steps = 30;
+  double guidance_scale = 1.5;
+};
+
+class MultiViewModel {
+ public:
+  // Checks that every file the stage needs is there (an Error names the first missing one and where the
+  // folder comes from) before reading any weights, then loads and converts to `precision`.
+  static std::unique_ptr<MultiViewModel> load(const std::filesystem::path& folder, Precision precision);
+
+  // condition: uint8 RGB [H, W, 3], the object on white as the official app passes it. Returns float
+  // [4, size, size, 3] in [0, 1], the model's four views in its own order (class labels 0..3). The initial
+  // latents and the per-step noise come from `noise`; `trace` as in run_image_diffusion.
+  torch::Tensor run(const torch::Tensor& condition, const MultiViewSettings& settings, NoiseSource& noise,
+                    TensorMap* trace = nullptr);
+
+  ClipVisionModelWithProjection image_encoder{nullptr};
+  std::unique_ptr<ClipImageProcessor> feature_extractor;
+  AutoencoderKL vae{nullptr};
+  std::unique_ptr<Scheduler> scheduler;
+  UNet2DConditionModel unet{nullptr};
+};
+
+}  // namespace u3d::nn

@@ -1,0 +1,120 @@
+// The image-to-four-views stage loaded from a folder in the official ckpt/img2mvimg layout, made of the
+// tiny golden models, reproduces the official pipeline's images; a missing file is reported first.
+#include "nn/pipelines/unique3d_multiview.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "golden.h"
+
+namespace u3d::nn {
+namespace {
+
+using namespace u3d::nn::test;
+namespace fs = std::filesystem;
+
+// The golden run's initial latents, then its per-step noise, in the order the pipeline draws them.
+class ReplayNoise : public NoiseSource {
+ public:
+  explicit ReplayNoise(TensorMap inputs) : inputs_(std::move(inputs)) {}
+  torch::Tensor randn(at::IntArrayRef shape, torch::ScalarType dtype) override {
+    const std::string key = draws == 0 ? "pipe.init_noise" : "pipe.step_noise." + std::to_string(draws - 1);
+    ++draws;
+    const torch::Tensor& n = inputs_.at(key);
+    EXPECT_EQ(n.sizes(), shape) << key;
+    return n.to(dtype);
+  }
+  int draws = 0;
+
+ private:
+  TensorMap inputs_;
+};
+
+class MultiViewFolder : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    root = fs::temp_directory_path() / ("u3d_test_img2mvimg_" + std::to_string(::getpid()));
+    fs::remove_all(root);
+    auto put = [&](const fs::path& from, const fs::path& to) {
+      fs::create_directories((root / to).parent_path());
+      fs::copy_file(from, root / to);
+    };
+    // The sd-image-variations stand-in (plain UNet config) plus Unique3D's unet_state_dict.pth.
+    put(golden_dir("unet_base") / "config.json", "unet/config.json");
+    put(golden_dir("unet_mv") / "weights.pth", "unet_state_dict.pth");
+    put(golden_dir("clip_vision") / "config.json", "image_encoder/config.json");
+    put(golden_dir("clip_vision") / "weights.safetensors", "image_encoder/model.safetensors");
+    put(golden_dir("vae") / "config.json", "vae/config.json");
+    put(golden_dir("vae") / "weights.safetensors", "vae/diffusion_pytorch_model.safetensors");
+    put(golden_dir("clip_vision") / "preprocessor_config_tiny32.json", "feature_extractor/preprocessor_config.json");
+    put(golden_dir("scheduler") / "sd_scheduler_config.json", "scheduler/scheduler_config.json");
+  }
+  void TearDown() override { fs::remove_all(root); }
+  fs::path root;
+};
+
+TEST_F(MultiViewFolder, ReproducesTheOfficialPipeline) {
+  auto model = MultiViewModel::load(root, Precision::kFp32);
+  EXPECT_EQ(model->unet->config.in_channels, 8);
+  auto in = golden_tensors("unet_mv", "inputs");
+  auto ref = golden_tensors("unet_mv", "outputs");
+  MultiViewSettings settings;
+  settings.size = 32;
+  settings.steps = 2;
+  ReplayNoise noise(in);
+  torch::Tensor images = model->run(in["pipe.test_image_uint8"], settings, noise);
+  EXPECT_EQ(noise.draws, 3);
+  EXPECT_CLOSE_TO_GOLDEN(images, ref["pipe.images"], 1e-4);
+}
+
+TEST_F(MultiViewFolder, Bf16StaysClose) {
+  auto model = MultiViewModel::load(root, Precision::kBf16);
+  auto in = golden_tensors("unet_mv", "inputs");
+  auto ref = golden_tensors("unet_mv", "outputs");
+  MultiViewSettings settings;
+  settings.size = 32;
+  settings.steps = 2;
+  ReplayNoise noise(in);
+  EXPECT_RELATIVE_TO_GOLDEN(model->run(in["pipe.test_image_uint8"], settings, noise), ref["pipe.images"], 2e-2);
+}
+
+TEST_F(MultiViewFolder, MissingOrMismatchedFilesAreNamed) {
+  fs::remove(root / "vae" / "diffusion_pytorch_model.safetensors");
+  try {
+    MultiViewModel::load(root, Precision::kFp32);
+    FAIL() << "no error";
+  } catch (const u3d::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("vae"), std::string::npos) << e.what();
+  }
+  fs::copy_file(golden_dir("vae") / "weights.safetensors", root / "vae" / "diffusion_pytorch_model.safetensors");
+
+  // unet_state_dict.pth that is not a torch checkpoint.
+  fs::rename(root / "unet_state_dict.pth", root / "real.pth");
+  fs::copy_file(golden_dir("unet_base") / "weights.safetensors", root / "unet_state_dict.pth");
+  try {
+    MultiViewModel::load(root, Precision::kFp32);
+    FAIL() << "no error";
+  } catch (const u3d::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("unet_state_dict.pth"), std::string::npos) << e.what();
+  }
+  fs::remove(root / "unet_state_dict.pth");
+  fs::rename(root / "real.pth", root / "unet_state_dict.pth");
+
+  // A UNet config that does not fit the weights: every mismatch is named.
+  nlohmann::json config = golden_config("unet_base");
+  config["block_out_channels"] = {16, 32};
+  std::ofstream(root / "unet" / "config.json") << config.dump();
+  try {
+    MultiViewModel::load(root, Precision::kFp32);
+    FAIL() << "no error";
+  } catch (const u3d::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("conv_in.weight"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(MultiViewModel::load(root, Precision::kFp16), u3d::Error);
+}
+
+}  // namespace
+}  // namespace u3d::nn
