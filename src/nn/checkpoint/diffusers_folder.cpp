@@ -3,6 +3,8 @@
 #include <vector>
 
 #include "core/error.h"
+#include "nn/checkpoint/pth_reader.h"
+#include "nn/checkpoint/safetensors.h"
 
 namespace fs = std::filesystem;
 
@@ -50,5 +52,9 @@ fs::path DiffusersFolder::preprocessor_config() const {
 }
 
 fs::path DiffusersFolder::scheduler_config() const { return file(fs::path("scheduler") / "scheduler_config.json"); }
+
+TensorMap load_weights_file(const fs::path& path) {
+  return path.extension() == ".safetensors" ? load_safetensors(path) : load_pth(path);
+}
 
 }  // namespace u3d::nn

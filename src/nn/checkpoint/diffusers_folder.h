@@ -14,6 +14,8 @@
 #include <filesystem>
 #include <string>
 
+#include "nn/checkpoint/tensor_map.h"
+
 namespace u3d::nn {
 
 class DiffusersFolder {
@@ -41,5 +43,8 @@ class DiffusersFolder {
   std::filesystem::path root_;
   std::string download_hint_;
 };
+
+// Reads a weights file by its extension: .safetensors, else the torch zip format (.pth, .bin).
+TensorMap load_weights_file(const std::filesystem::path& path);
 
 }  // namespace u3d::nn

@@ -4,6 +4,9 @@
 
 #include "core/error.h"
 #include "core/progress.h"
+#include "nn/checkpoint/config_json.h"
+#include "nn/checkpoint/state_dict_loader.h"
+#include "nn/schedulers/scheduler_config.h"
 #include "nn/preprocess/pil_resize.h"
 
 namespace u3d::nn {
@@ -24,6 +27,31 @@ torch::Tensor vae_preprocess(const torch::Tensor& rgb, int64_t width, int64_t he
 }
 
 }  // namespace
+
+ConditioningModels load_conditioning_models(const DiffusersFolder& folder, Precision precision) {
+  check_precision_supported(precision, torch::kCPU);
+  const auto clip_config = folder.component_config("image_encoder");
+  const auto clip_weights = folder.component_weights("image_encoder");
+  const auto vae_config = folder.component_config("vae");
+  const auto vae_weights = folder.component_weights("vae");
+  const auto processor_config = folder.preprocessor_config();
+  const auto scheduler_config = folder.scheduler_config();
+
+  ConditioningModels m;
+  m.feature_extractor = std::make_unique<ClipImageProcessor>(
+      ClipImageProcessorConfig::from_json(read_json_file(processor_config), processor_config.string()));
+  m.scheduler = make_scheduler(parse_scheduler_config(read_json_file(scheduler_config), scheduler_config.string()),
+                               SchedulerKind::EulerAncestral);
+  m.image_encoder = ClipVisionModelWithProjection(
+      ClipVisionConfig::from_json(read_json_file(clip_config), clip_config.string()), torch::TensorOptions());
+  load_state_dict(*m.image_encoder, load_weights_file(clip_weights), clip_policy(), clip_weights.string());
+  m.vae = AutoencoderKL(AutoencoderKLConfig::from_json(read_json_file(vae_config), vae_config.string()),
+                        torch::TensorOptions());
+  load_state_dict(*m.vae, load_weights_file(vae_weights), {}, vae_weights.string());
+  set_precision(*m.image_encoder, precision);
+  set_precision(*m.vae, precision);
+  return m;
+}
 
 torch::Tensor run_image_diffusion(const ImageDiffusionModels& models, const std::vector<torch::Tensor>& condition_images,
                                   const ImageDiffusionSettings& s, NoiseSource& noise, TensorMap* trace) {

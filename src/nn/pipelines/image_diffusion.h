@@ -15,11 +15,14 @@
 #include <torch/torch.h>
 
 #include <functional>
+#include <memory>
 #include <vector>
 
+#include "nn/checkpoint/diffusers_folder.h"
 #include "nn/checkpoint/tensor_map.h"
 #include "nn/models/clip_vision.h"
 #include "nn/models/vae.h"
+#include "nn/precision.h"
 #include "nn/preprocess/clip_image_processor.h"
 #include "nn/schedulers/noise_source.h"
 #include "nn/schedulers/scheduler.h"
@@ -31,6 +34,20 @@ namespace u3d::nn {
 using Denoiser = std::function<torch::Tensor(const torch::Tensor& latent_input, const torch::Tensor& timestep,
                                              const torch::Tensor& image_embeddings,
                                              const torch::Tensor& condition_latents)>;
+
+// The parts both Unique3D stages take from a diffusers folder of sd-image-variations: the CLIP image
+// encoder with its feature extractor, the VAE, and the scheduler config built as EulerAncestral (as the
+// official trainers' construct_pipeline does).
+struct ConditioningModels {
+  ClipVisionModelWithProjection image_encoder{nullptr};
+  std::unique_ptr<ClipImageProcessor> feature_extractor;
+  AutoencoderKL vae{nullptr};
+  std::unique_ptr<Scheduler> scheduler;
+};
+
+// Checks that every file is in `folder` before reading any weights (an Error names the first missing
+// one), then loads and converts to `precision`.
+ConditioningModels load_conditioning_models(const DiffusersFolder& folder, Precision precision);
 
 struct ImageDiffusionModels {
   ClipVisionModelWithProjection& image_encoder;

@@ -12,14 +12,10 @@
 #include <memory>
 
 #include "nn/checkpoint/tensor_map.h"
-#include "nn/models/clip_vision.h"
 #include "nn/models/unet.h"
-#include "nn/models/vae.h"
 #include "nn/pipelines/image_diffusion.h"
 #include "nn/precision.h"
-#include "nn/preprocess/clip_image_processor.h"
 #include "nn/schedulers/noise_source.h"
-#include "nn/schedulers/scheduler.h"
 
 namespace u3d::nn {
 
@@ -41,10 +37,7 @@ class MultiViewModel {
   torch::Tensor run(const torch::Tensor& condition, const MultiViewSettings& settings, NoiseSource& noise,
                     TensorMap* trace = nullptr);
 
-  ClipVisionModelWithProjection image_encoder{nullptr};
-  std::unique_ptr<ClipImageProcessor> feature_extractor;
-  AutoencoderKL vae{nullptr};
-  std::unique_ptr<Scheduler> scheduler;
+  ConditioningModels parts;  // CLIP, feature extractor, VAE, scheduler of the same folder
   UNet2DConditionModel unet{nullptr};
 };
 

@@ -1,0 +1,46 @@
+#pragma once
+// Unique3D's normal-map stage, loaded as the official app loads it (app/custom_models/normal_prediction.py
+// with image2normal.yaml): the sd-image-variations diffusers folder gives the UNet config, CLIP, VAE,
+// feature extractor and scheduler; ckpt/image2normal/unet_state_dict.pth gives the main UNet with its
+// crosspond_attention weights and, when it holds them, the reference UNet under "ref_unet." (else the
+// reference is the folder's plain UNet). Run on a batch of views, each its own condition, with the
+// reference attention (nn/models/unet_reference.h). Defaults are the app's: 512 px, 30 steps, guidance
+// 2.0. The official post-processing (background removal, rotating each view's normals to world space)
+// is not part of this stage.
+#include <torch/torch.h>
+
+#include <filesystem>
+#include <memory>
+#include <vector>
+
+#include "nn/checkpoint/tensor_map.h"
+#include "nn/models/unet_reference.h"
+#include "nn/pipelines/image_diffusion.h"
+#include "nn/precision.h"
+#include "nn/schedulers/noise_source.h"
+
+namespace u3d::nn {
+
+struct NormalSettings {
+  int64_t size = 512;  // side of each normal map and of the encoded condition
+  int steps = 30;
+  double guidance_scale = 2.0;
+};
+
+class NormalModel {
+ public:
+  // image_variations: the sd-image-variations diffusers folder; image2normal: the official
+  // ckpt/image2normal folder. Every file is checked before any weights are read.
+  static std::unique_ptr<NormalModel> load(const std::filesystem::path& image_variations,
+                                           const std::filesystem::path& image2normal, Precision precision);
+
+  // views: uint8 RGB [H, W, 3] each (the official app passes the views on white). Returns float
+  // [views, size, size, 3] in [0, 1]: each view's normal map in camera space as the model draws it.
+  torch::Tensor run(const std::vector<torch::Tensor>& views, const NormalSettings& settings, NoiseSource& noise,
+                    TensorMap* trace = nullptr);
+
+  ConditioningModels parts;
+  std::unique_ptr<ReferenceUNet> unet;
+};
+
+}  // namespace u3d::nn

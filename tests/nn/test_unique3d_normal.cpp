@@ -1,0 +1,105 @@
+// The normal-map stage loaded as the official app loads it (an sd-image-variations folder plus
+// ckpt/image2normal/unet_state_dict.pth), made of the tiny golden models, reproduces the official
+// pipeline's images, with the reference UNet taken from the folder or from the .pth's "ref_unet." keys.
+#include "nn/pipelines/unique3d_normal.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+
+#include "golden.h"
+
+namespace u3d::nn {
+namespace {
+
+using namespace u3d::nn::test;
+namespace fs = std::filesystem;
+
+class ReplayNoise : public NoiseSource {
+ public:
+  explicit ReplayNoise(TensorMap inputs) : inputs_(std::move(inputs)) {}
+  torch::Tensor randn(at::IntArrayRef shape, torch::ScalarType dtype) override {
+    const std::string key = draws == 0 ? "pipe.init_noise" : "pipe.step_noise." + std::to_string(draws - 1);
+    ++draws;
+    const torch::Tensor& n = inputs_.at(key);
+    EXPECT_EQ(n.sizes(), shape) << key;
+    return n.to(dtype);
+  }
+  int draws = 0;
+
+ private:
+  TensorMap inputs_;
+};
+
+class NormalFolders : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    root = fs::temp_directory_path() / ("u3d_test_image2normal_" + std::to_string(::getpid()));
+    base = root / "sd-image-variations-diffusers";
+    unique3d = root / "image2normal";
+    fs::remove_all(root);
+    auto put = [&](const fs::path& from, const fs::path& to) {
+      fs::create_directories((base / to).parent_path());
+      fs::copy_file(from, base / to);
+    };
+    put(golden_dir("unet_base") / "config.json", "unet/config.json");
+    put(golden_dir("unet_base") / "weights.safetensors", "unet/diffusion_pytorch_model.safetensors");
+    put(golden_dir("clip_vision") / "config.json", "image_encoder/config.json");
+    put(golden_dir("clip_vision") / "weights.safetensors", "image_encoder/model.safetensors");
+    put(golden_dir("vae") / "config.json", "vae/config.json");
+    put(golden_dir("vae") / "weights.safetensors", "vae/diffusion_pytorch_model.safetensors");
+    put(golden_dir("clip_vision") / "preprocessor_config_tiny32.json", "feature_extractor/preprocessor_config.json");
+    put(golden_dir("scheduler") / "sd_scheduler_config.json", "scheduler/scheduler_config.json");
+    fs::create_directories(unique3d);
+  }
+  void TearDown() override { fs::remove_all(root); }
+
+  void expect_official_images(Precision precision, double tolerance) {
+    auto model = NormalModel::load(base, unique3d, precision);
+    auto in = golden_tensors("unet_ref", "inputs");
+    auto ref = golden_tensors("unet_ref", "outputs");
+    const torch::Tensor image = golden_tensors("unet_mv", "inputs")["pipe.test_image_uint8"];
+    NormalSettings settings;
+    settings.size = 32;
+    settings.steps = 2;
+    ReplayNoise noise(in);
+    torch::Tensor images = model->run({image, image.flip(1).contiguous()}, settings, noise);
+    EXPECT_EQ(noise.draws, 3);
+    if (precision == Precision::kFp32)
+      EXPECT_CLOSE_TO_GOLDEN(images, ref["pipe.images"], tolerance);
+    else
+      EXPECT_RELATIVE_TO_GOLDEN(images, ref["pipe.images"], tolerance);
+  }
+
+  fs::path root, base, unique3d;
+};
+
+TEST_F(NormalFolders, ReferenceUNetFromTheFolder) {
+  fs::copy_file(golden_dir("unet_ref") / "weights.pth", unique3d / "unet_state_dict.pth");
+  expect_official_images(Precision::kFp32, 1e-4);
+  expect_official_images(Precision::kBf16, 2e-2);
+}
+
+TEST_F(NormalFolders, ReferenceUNetFromTheCheckpoint) {
+  // The main UNet and the reference (unet_base) under "ref_unet." (tests/data/nn/unet_ref/make_pth.py).
+  fs::copy_file(golden_dir("unet_ref") / "weights_ref_unet.pth", unique3d / "unet_state_dict.pth");
+  // The folder's own UNet weights are then not what the reference uses: spoil them.
+  fs::remove(base / "unet" / "diffusion_pytorch_model.safetensors");
+  TensorMap spoiled = golden_tensors("unet_base", "weights");
+  for (auto& [key, value] : spoiled) value = torch::zeros_like(value);
+  save_safetensors(spoiled, base / "unet" / "diffusion_pytorch_model.safetensors");
+  expect_official_images(Precision::kFp32, 1e-4);
+}
+
+TEST_F(NormalFolders, MissingFilesAreNamedBeforeLoading) {
+  try {
+    NormalModel::load(base, unique3d, Precision::kFp32);
+    FAIL() << "no error";
+  } catch (const u3d::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("unet_state_dict.pth"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace u3d::nn
