@@ -24,7 +24,7 @@ torch::Tensor merge_heads(const torch::Tensor& x, int64_t heads) {
 }
 
 // Softmax computed in at least fp32, returned in the scores' dtype. ATen's bf16 softmax already
-// computes in fp32 and rounds once (equal to the fp32 softmax rounded to bf16; test_attention checks
+// computes in fp32 and rounds once (equal to the fp32 softmax rounded to bf16; test_precision checks
 // it) and is about 20x faster on the CPU than softmax(dtype=float) followed by a cast; fp16 is upcast.
 torch::Tensor softmax_fp32(const torch::Tensor& scores) {
   if (scores.scalar_type() != torch::kHalf) return scores.softmax(-1);
