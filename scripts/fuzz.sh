@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets of fuzz/ with clang, ASan and UBSan into build-fuzz/ and runs each for
 # SECONDS (default 30) from its seeds: the small ones committed in fuzz/corpus/<target>/, fixtures from
-# tests/data and examples linked in by path, and what earlier runs found (build-fuzz/corpus/<target>/).
+# tests/data and examples linked in by path, and what earlier runs found (build-fuzz/corpus/<target>/),
+# with the keywords of fuzz/dict/<target>.dict.
 # Exits non-zero when any target finds a crash, sanitizer report, leak, timeout or out-of-memory; the
 # input that caused it is left in build-fuzz/artifacts/<target>/. Prints executions per second and
 # coverage per target at the end.
@@ -75,9 +76,11 @@ for t in "${targets[@]}"; do
   log="$build/logs/$t.log"
   mkdir -p "$corpus" "$artifacts" "$(dirname "$log")"
   echo "[fuzz] $t: ${seconds}s"
+  dict=()
+  [ -f "fuzz/dict/$t.dict" ] && dict=(-dict="fuzz/dict/$t.dict")
   rc=0
   "$build/fuzz/fuzz_$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len="${max_len[$t]}" \
-    -print_final_stats=1 -artifact_prefix="$artifacts/" "$corpus" "fuzz/corpus/$t" "$build/seeds/$t" \
+    "${dict[@]}" -print_final_stats=1 -artifact_prefix="$artifacts/" "$corpus" "fuzz/corpus/$t" "$build/seeds/$t" \
     </dev/null >"$log" 2>&1 || rc=$?
   # libFuzzer's last status line: "#N DONE cov: C ft: F corp: ..."; its stats: execs and exec/s.
   status=$(grep -E '^#[0-9]+[[:space:]]+(DONE|pulse|NEW|REDUCE|INITED)' "$log" | tail -1 || true)
