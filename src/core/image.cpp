@@ -1,6 +1,8 @@
 #include "core/image.h"
 
 #include <cmath>
+#include <cstring>
+#include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -28,10 +30,21 @@ Image from_mat_float(const cv::Mat& m) {
 
 }  // namespace
 
+bool is_dicom_signature(const unsigned char* bytes, size_t size) {
+  return size >= 132 && std::memcmp(bytes + 128, "DICM", 4) == 0;
+}
+
 Image load_image(const fs::path& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw Error("image not found: " + path.string());
   if (fs::is_directory(path, ec)) throw Error("expected an image file, got a folder: " + path.string());
+  {
+    unsigned char head[132] = {};
+    std::ifstream in(path, std::ios::binary);
+    in.read(reinterpret_cast<char*>(head), sizeof(head));
+    if (is_dicom_signature(head, size_t(in.gcount())))
+      throw Error("cannot decode image " + path.string() + ": a DICOM file, not a PNG/JPEG image");
+  }
   cv::Mat m;
   try {
     m = cv::imread(path.string(), cv::IMREAD_UNCHANGED);

@@ -2,6 +2,7 @@
 // Image: interleaved float channels, row-major, row 0 at the top of the picture (see docs/conventions.md).
 // Colour values are kept as stored in the file (sRGB-encoded for ordinary photos), scaled to [0, 1];
 // channel order is R, G, B, A. Gray images have 1 channel.
+#include <cstddef>
 #include <filesystem>
 #include <vector>
 
@@ -27,6 +28,11 @@ struct Image {
 // Loads PNG/JPEG/... (8 or 16 bit, gray/RGB/RGBA) to floats in [0, 1], RGB(A) order, alpha kept.
 // Throws Error naming the file if it is missing, unreadable or not an image.
 Image load_image(const std::filesystem::path& path);
+
+// True when OpenCV would hand these bytes (the start of a file) to its DICOM decoder: GDCM asserts on
+// corrupt input and aborts the whole process, so load_image and decode_image refuse DICOM (the signature
+// "DICM" at byte 128) with an Error instead. No texture or view is a medical scan.
+bool is_dicom_signature(const unsigned char* bytes, size_t size);
 
 // Same, always 4 channels: gray is replicated, missing alpha becomes 1.
 Image load_image_rgba(const std::filesystem::path& path);

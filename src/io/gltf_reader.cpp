@@ -21,12 +21,30 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Image decoding callback for tinygltf: keeps decoded images by glTF image index.
+// What the image callback needs: the model tinygltf is filling in, and the images decoded so far by glTF
+// image index.
+struct ImageLoading {
+  const tinygltf::Model* model;
+  std::map<int, Image> images;
+};
+
+// Image decoding callback for tinygltf. tinygltf hands over an image stored in a buffer view without
+// checking that the view lies inside its buffer, so that is checked here before a byte is read.
 bool decode_gltf_image(tinygltf::Image* image, const int index, std::string* err, std::string*, int, int,
                        const unsigned char* bytes, int size, void* user_data) {
-  auto& images = *static_cast<std::map<int, Image>*>(user_data);
+  auto& loading = *static_cast<ImageLoading*>(user_data);
+  const std::string what = "image " + std::to_string(index) + " '" + image->name + "'";
   try {
-    images[index] = decode_image(bytes, size_t(size), "image " + std::to_string(index) + " '" + image->name + "'");
+    if (image->bufferView >= 0) {
+      const auto& views = loading.model->bufferViews;
+      require(size_t(image->bufferView) < views.size(), what + " refers to a missing buffer view");
+      const tinygltf::BufferView& view = views[size_t(image->bufferView)];
+      require(view.buffer >= 0 && size_t(view.buffer) < loading.model->buffers.size(), what + " refers to a missing buffer");
+      const size_t buffer_size = loading.model->buffers[size_t(view.buffer)].data.size();
+      require(view.byteOffset <= buffer_size && view.byteLength <= buffer_size - view.byteOffset && size >= 0,
+              what + ": its buffer view reaches past the end of its buffer (truncated file?)");
+    }
+    loading.images[index] = decode_image(bytes, size_t(size), what);
   } catch (const Error& e) {
     if (err) *err += e.what();
     return false;
@@ -305,9 +323,9 @@ bool extension_supported(const std::string& name) {
 Mesh read_gltf(const fs::path& path) {
   const std::string file = path.string();
   tinygltf::TinyGLTF loader;
-  std::map<int, Image> images;
-  loader.SetImageLoader(&decode_gltf_image, &images);
   tinygltf::Model model;
+  ImageLoading images{&model, {}};
+  loader.SetImageLoader(&decode_gltf_image, &images);
   std::string err, warn;
   std::string ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
@@ -321,7 +339,7 @@ Mesh read_gltf(const fs::path& path) {
   require(ok, "cannot read glTF file " + file + ": " + std::string(trim(err.empty() ? warn : err)));
   for (const auto& extension : model.extensionsRequired)
     require(extension_supported(extension), file + ": requires glTF extension " + extension + ", which is not supported");
-  return GltfMeshBuilder(model, std::move(images), file).build();
+  return GltfMeshBuilder(model, std::move(images.images), file).build();
 }
 
 }  // namespace u3d

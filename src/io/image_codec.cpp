@@ -10,6 +10,7 @@ namespace u3d {
 
 Image decode_image(const unsigned char* bytes, size_t size, const std::string& what) {
   require(size > 0, "cannot decode " + what + ": no image data");
+  require(!is_dicom_signature(bytes, size), "cannot decode " + what + ": DICOM data, not a PNG/JPEG image");
   cv::Mat encoded(1, int(size), CV_8U, const_cast<unsigned char*>(bytes));
   cv::Mat m;
   try {

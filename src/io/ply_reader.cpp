@@ -142,6 +142,8 @@ class PlyBodyReader {
       : data_(data), pos_(offset), format_(format), file_(std::move(file)) {}
 
   double next(PlyType type) { return format_ == PlyFormat::Ascii ? next_text() : next_binary(type); }
+  // Bytes not read yet: every value takes at least one.
+  size_t remaining() const { return data_.size() - pos_; }
 
  private:
   double next_text() {
@@ -267,6 +269,9 @@ void read_faces(PlyBodyReader& body, const PlyElement& element, Mesh& mesh, cons
       }
       int count = to_index(body.next(p.count_type), file, "face vertex count");
       require(count >= 3, file + ": face " + std::to_string(f) + " has " + std::to_string(count) + " vertices (need 3 or more)");
+      // A corrupt count must not allocate gigabytes before the data runs out.
+      require(size_t(count) <= body.remaining(), file + ": face " + std::to_string(f) + " claims " + std::to_string(count) +
+                                                     " vertices but the file is too short (truncated?)");
       polygon.resize(size_t(count));
       for (int& index : polygon) index = to_index(body.next(p.type), file, "vertex index");
       for (size_t i = 1; i + 1 < polygon.size(); ++i) mesh.faces.emplace_back(polygon[0], polygon[i], polygon[i + 1]);

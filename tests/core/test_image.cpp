@@ -88,6 +88,22 @@ TEST(Image, BadInputsGiveErrors) {
   EXPECT_THROW(save_image(Image(2, 2, 3), d / "no_such_dir" / "x.png"), Error);
 }
 
+// 128 bytes, "DICM", one more: OpenCV hands that to GDCM, whose assertion aborted the process (found by
+// fuzz_image). It must be an Error like any other file that is not an image.
+TEST(Image, DicomSignatureIsAnErrorNotAnAbort) {
+  const fs::path path = temp_dir() / "scan.png";
+  {
+    std::ofstream out(path, std::ios::binary);
+    out << std::string(128, '\xa7') << "DICM" << '\xa4';
+  }
+  try {
+    load_image(path);
+    FAIL() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("scan.png: a DICOM file"), std::string::npos) << e.what();
+  }
+}
+
 // A PNG whose header claims 65535 x 65535 pixels: OpenCV refuses it with its raw assertion text,
 // which must not reach the user.
 TEST(Image, OversizedPngIsAnErrorInPlainWords) {

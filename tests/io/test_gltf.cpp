@@ -192,6 +192,24 @@ TEST(Glb, CorruptFilesGiveErrors) {
   }
 }
 
+// An image stored in a buffer view that reaches past its 4-byte buffer: tinygltf passed the bytes on
+// unchecked and the decoder read past the buffer (an ASan heap overflow, found by fuzz_gltf).
+TEST(Gltf, ImageBufferViewPastItsBufferIsAnError) {
+  fs::path dir = scratch_dir();
+  write_file(dir / "overrun.gltf",
+             R"({"asset":{"version":"2.0"},)"
+             R"("buffers":[{"byteLength":4,"uri":"data:application/octet-stream;base64,AAAAAA=="}],)"
+             R"("bufferViews":[{"buffer":0,"byteOffset":2,"byteLength":4000}],)"
+             R"("images":[{"bufferView":0,"mimeType":"image/png"}]})");
+  try {
+    read_mesh(dir / "overrun.gltf");
+    ADD_FAILURE() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("buffer view reaches past the end of its buffer"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("overrun.gltf"), std::string::npos) << e.what();
+  }
+}
+
 // A .gltf with an external .bin and PNG, written by tinygltf rather than by us, so a UV flip that our
 // writer and reader got wrong in the same way could not cancel out.
 TEST(Gltf, ReadsExternalBufferAndTextureAndFlipsTexcoords) {

@@ -92,6 +92,11 @@ TEST(Ply, CorruptAndTruncatedFilesGiveErrors) {
   write_file(dir / "negative.ply",
              "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
              "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 -1\n");
+  // A face claiming 2^31 - 16 vertices in a 100-byte file: an error, not an 8 GB allocation.
+  std::string huge_face = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                          "property float z\nelement face 1\nproperty list int int vertex_indices\nend_header\n";
+  huge_face += std::string(36, '\0') + std::string("\xf0\xff\xff\x7f", 4) + std::string(12, '\0');
+  write_file(dir / "huge_face.ply", huge_face);
   write_file(dir / "text.ply",
              "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
              "end_header\n0 zero 0\n");
@@ -99,7 +104,7 @@ TEST(Ply, CorruptAndTruncatedFilesGiveErrors) {
       {"truncated.ply", "unexpected end of data"}, {"noheader.ply", "no end_header"},
       {"magic.ply", "not a PLY file"},            {"huge.ply", "too short"},
       {"index.ply", "references vertex 9"},       {"text.ply", "'zero' is not a number"},
-      {"negative.ply", "vertex index -1 is out of range"}};  // an integer, printed as one
+      {"negative.ply", "vertex index -1 is out of range"}, {"huge_face.ply", "claims 2147483632 vertices"}};  // an integer, printed as one
   for (const auto& [name, expected] : cases) {
     try {
       read_mesh(dir / name);

@@ -1,5 +1,6 @@
 #include "nn/checkpoint/config_json.h"
 
+#include <cmath>
 #include <fstream>
 
 #include "core/error.h"
@@ -32,9 +33,12 @@ int64_t ConfigReader::get_int(const std::string& key, int64_t fallback) const {
   if (!has(key)) return fallback;
   const auto& v = value(key);
   if (v.is_number_integer()) return v.get<int64_t>();
-  // Python configs sometimes store integral values as floats (e.g. 1.0).
-  if (v.is_number_float() && v.get<double>() == static_cast<double>(static_cast<int64_t>(v.get<double>())))
-    return static_cast<int64_t>(v.get<double>());
+  // Python configs sometimes store integral values as floats (e.g. 1.0). Casting a double outside the
+  // int64 range is undefined, so the range is checked first ([-2^63, 2^63)).
+  if (v.is_number_float()) {
+    const double d = v.get<double>();
+    if (d >= -9223372036854775808.0 && d < 9223372036854775808.0 && d == std::trunc(d)) return static_cast<int64_t>(d);
+  }
   bad_type(key, "an integer");
 }
 

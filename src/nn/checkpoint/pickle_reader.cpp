@@ -3,6 +3,7 @@
 #include <bit>
 #include <sstream>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "core/error.h"
 
@@ -71,10 +72,34 @@ enum Op : uint8_t {
   FRAME = 0x95,
 };
 
+// The identity of a container value; nullptr for every other value.
+const void* container_id(const Value& v) {
+  if (const auto* t = std::get_if<std::shared_ptr<Tuple>>(&v.v)) return t->get();
+  if (const auto* l = std::get_if<std::shared_ptr<List>>(&v.v)) return l->get();
+  if (const auto* d = std::get_if<std::shared_ptr<Dict>>(&v.v)) return d->get();
+  return nullptr;
+}
+
+// The values directly inside a container (dict keys and values alike).
+std::vector<Value*> children_of(const Value& v) {
+  std::vector<Value*> out;
+  auto add = [&](std::vector<Value>& items) {
+    for (Value& item : items) out.push_back(&item);
+  };
+  if (const auto* t = std::get_if<std::shared_ptr<Tuple>>(&v.v)) add((*t)->items);
+  if (const auto* l = std::get_if<std::shared_ptr<List>>(&v.v)) add((*l)->items);
+  if (const auto* d = std::get_if<std::shared_ptr<Dict>>(&v.v))
+    for (auto& [key, value] : (*d)->items) out.insert(out.end(), {&key, &value});
+  return out;
+}
+
 class Machine {
  public:
   Machine(std::string_view data, PickleHooks& hooks, const std::string& source)
       : data_(data), hooks_(hooks), source_(source) {}
+  Machine(const Machine&) = delete;
+  Machine& operator=(const Machine&) = delete;
+  ~Machine() { release(); }
 
   Value run() {
     while (true) {
@@ -89,6 +114,7 @@ class Machine {
         case FRAME: read_bytes(8); break;  // framing is a streaming hint only
         case STOP: {
           if (stack_.size() != 1 || !marks_.empty()) fail("STOP with " + std::to_string(stack_.size()) + " values on the stack");
+          check_result(stack_.back());
           return stack_.back();
         }
         case MARK: marks_.push_back(stack_.size()); break;
@@ -289,6 +315,59 @@ class Machine {
     push(std::move(global));
   }
 
+  // The result must not contain itself: APPEND / SETITEM through the memo can put a container inside
+  // itself, which the shared pointers would never free (and no state dict does). An iterative
+  // depth-first walk; every container it finishes goes into `kept_`, which release() leaves alone.
+  void check_result(const Value& result) {
+    struct Frame {
+      const void* id;
+      std::vector<Value*> children;
+      size_t next = 0;
+    };
+    std::vector<Frame> path;
+    std::unordered_set<const void*> on_path;
+    auto enter = [&](const Value& v) {
+      const void* id = container_id(v);
+      if (!id || kept_.count(id)) return;
+      if (!on_path.insert(id).second) {
+        kept_.clear();
+        fail("the result contains itself (a recursive structure; state dicts have none)");
+      }
+      path.push_back({id, children_of(v)});
+    };
+    enter(result);
+    while (!path.empty()) {
+      Frame& frame = path.back();
+      if (frame.next < frame.children.size()) {
+        enter(*frame.children[frame.next++]);  // may grow `path`: `frame` is not used after this
+        continue;
+      }
+      on_path.erase(frame.id);
+      kept_.insert(frame.id);
+      path.pop_back();
+    }
+  }
+
+  // Empties every container that is not part of the returned result: this breaks the reference cycles
+  // left on the stack or in the memo, or in a rejected result. After a failure nothing is kept.
+  void release() {
+    std::vector<Value> work;
+    for (Value& v : stack_) work.push_back(std::move(v));
+    for (auto& entry : memo_) work.push_back(std::move(entry.second));
+    stack_.clear();
+    memo_.clear();
+    while (!work.empty()) {
+      Value v = std::move(work.back());
+      work.pop_back();
+      const void* id = container_id(v);
+      if (!id || kept_.count(id)) continue;
+      for (Value* child : children_of(v)) work.push_back(std::move(*child));
+      if (auto* t = std::get_if<std::shared_ptr<Tuple>>(&v.v)) (*t)->items.clear();
+      if (auto* l = std::get_if<std::shared_ptr<List>>(&v.v)) (*l)->items.clear();
+      if (auto* d = std::get_if<std::shared_ptr<Dict>>(&v.v)) (*d)->items.clear();
+    }
+  }
+
   std::string_view data_;
   PickleHooks& hooks_;
   const std::string& source_;
@@ -297,9 +376,39 @@ class Machine {
   std::vector<Value> stack_;
   std::vector<size_t> marks_;
   std::unordered_map<uint32_t, Value> memo_;
+  std::unordered_set<const void*> kept_;  // the containers of the returned result
 };
 
 }  // namespace
+
+// A container's items are moved out before the container itself is freed, and containers that the
+// items alone keep alive are emptied the same way, so nesting of any depth (one byte per level: TUPLE1
+// after TUPLE1) is freed in a loop instead of a recursion that overflows the stack.
+static void free_items_iteratively(std::vector<Value>& items) {
+  std::vector<Value> work(std::make_move_iterator(items.begin()), std::make_move_iterator(items.end()));
+  items.clear();
+  while (!work.empty()) {
+    Value v = std::move(work.back());
+    work.pop_back();
+    auto take = [&](auto& container) {
+      if (!container || container.use_count() != 1) return;  // still used elsewhere: not freed now
+      for (Value* child : children_of(v)) work.push_back(std::move(*child));
+      container->items.clear();
+    };
+    if (auto* t = std::get_if<std::shared_ptr<Tuple>>(&v.v)) take(*t);
+    if (auto* l = std::get_if<std::shared_ptr<List>>(&v.v)) take(*l);
+    if (auto* d = std::get_if<std::shared_ptr<Dict>>(&v.v)) take(*d);
+  }
+}
+
+Tuple::~Tuple() { free_items_iteratively(items); }
+List::~List() { free_items_iteratively(items); }
+Dict::~Dict() {
+  std::vector<Value> flat;
+  for (auto& [key, value] : items) flat.insert(flat.end(), {std::move(key), std::move(value)});
+  items.clear();
+  free_items_iteratively(flat);
+}
 
 Value unpickle(std::string_view data, PickleHooks& hooks, const std::string& source) {
   return Machine(data, hooks, source).run();

@@ -3,7 +3,8 @@
 // machine over the opcodes torch.save emits (protocol 2, plus the protocol 4 framing/memo forms) and
 // never runs code: every GLOBAL goes through PickleHooks, which decides whether the name is one it
 // knows and builds the object itself. Anything else (unknown opcodes, unknown globals, malformed or
-// truncated data) is a u3d::Error naming the source, the byte offset and the problem.
+// truncated data, a result that contains itself) is a u3d::Error naming the source, the byte offset and
+// the problem.
 #include <concepts>
 #include <cstdint>
 #include <memory>
@@ -53,15 +54,19 @@ struct Value {
   std::string type_name() const;
 };
 
+// The destructors free nested containers in a loop, not recursively, so any depth is safe to free.
 struct Tuple {
   std::vector<Value> items;
+  ~Tuple();
 };
 struct List {
   std::vector<Value> items;
+  ~List();
 };
 // dict / OrderedDict in insertion order.
 struct Dict {
   std::vector<std::pair<Value, Value>> items;
+  ~Dict();
 };
 
 class PickleHooks {

@@ -1,0 +1,105 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets of fuzz/ with clang, ASan and UBSan into build-fuzz/ and runs each for
+# SECONDS (default 30) from its seeds: the small ones committed in fuzz/corpus/<target>/, fixtures from
+# tests/data and examples linked in by path, and what earlier runs found (build-fuzz/corpus/<target>/),
+# with the keywords of fuzz/dict/<target>.dict.
+# Exits non-zero when any target finds a crash, sanitizer report, leak, timeout or out-of-memory; the
+# input that caused it is left in build-fuzz/artifacts/<target>/. Prints executions per second and
+# coverage per target at the end.
+#   scripts/fuzz.sh [SECONDS] [TARGET...]     targets: image obj mtl ply gltf config pickle
+# Environment: FUZZ_JOBS (build jobs, default all cores).
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$root"
+seconds="${1:-30}"
+[ $# -gt 0 ] && shift
+all_targets=(image obj mtl ply gltf config pickle)
+targets=("$@")
+[ ${#targets[@]} -eq 0 ] && targets=("${all_targets[@]}")
+
+# Dependencies: the project's own, then clang with its sanitizer/libFuzzer runtimes and OpenMP.
+bash scripts/install_deps.sh
+missing=()
+for p in clang libclang-rt-14-dev libomp-dev; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "[fuzz] apt packages: ${missing[*]}"
+  SUDO=""
+  if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+build=build-fuzz
+if [ ! -f "$build/CMakeCache.txt" ]; then
+  gen=()
+  command -v ninja >/dev/null 2>&1 && gen=(-G Ninja)
+  CC=clang CXX=clang++ cmake -S . -B "$build" "${gen[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DUNIQUE3D_FUZZ=ON \
+    -DUNIQUE3D_WITH_TORCH=OFF -DUNIQUE3D_BUILD_TESTS=OFF -DUNIQUE3D_BUILD_BENCH=OFF
+fi
+cmake --build "$build" --parallel "${FUZZ_JOBS:-$(nproc)}" --target $(printf 'fuzz_%s ' "${targets[@]}")
+
+# Seeds from the repository's fixtures, linked (not copied) into one folder per target.
+seeds_from() {
+  local target=$1
+  shift
+  local dir="$build/seeds/$target"
+  rm -rf "$dir"
+  mkdir -p "$dir"
+  for f in "$@"; do
+    [ -f "$f" ] && ln -s "$root/$f" "$dir/$(echo "$f" | tr / _)"
+  done
+  true
+}
+seeds_from image examples/spot/spot_texture.png examples/spot/views/front_rgb.png examples/spot/views/front_normal.png \
+  tests/data/nn/clip_vision/test_image_64x48.png tests/data/objects/avocado/avocado_tex0.jpg
+seeds_from obj examples/spot/spot.obj tests/data/objects/avocado/avocado.obj
+seeds_from mtl examples/spot/spot.mtl tests/data/objects/avocado/avocado.mtl
+seeds_from ply
+seeds_from gltf
+seeds_from config tests/data/nn/*/config.json tests/data/nn/*/*_config*.json tests/data/nn/scheduler/tolerances.json
+seeds_from pickle
+# The pickle of a real torch.save checkpoint, taken out of its zip.
+python3 -c "import sys, zipfile; z = zipfile.ZipFile(sys.argv[1]); open(sys.argv[2], 'wb').write(z.read('weights/data.pkl'))" \
+  tests/data/nn/unet_mv/weights.pth "$build/seeds/pickle/unet_mv_data.pkl"
+
+# Longest input each target tries: large enough for the fixtures that matter, small enough to stay fast.
+declare -A max_len=([image]=131072 [obj]=65536 [mtl]=4096 [ply]=16384 [gltf]=16384 [config]=16384 [pickle]=65536)
+
+failed=()
+summary=()
+for t in "${targets[@]}"; do
+  corpus="$build/corpus/$t"
+  artifacts="$build/artifacts/$t"
+  log="$build/logs/$t.log"
+  mkdir -p "$corpus" "$artifacts" "$(dirname "$log")"
+  echo "[fuzz] $t: ${seconds}s"
+  dict=()
+  [ -f "fuzz/dict/$t.dict" ] && dict=(-dict="fuzz/dict/$t.dict")
+  rc=0
+  "$build/fuzz/fuzz_$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len="${max_len[$t]}" \
+    "${dict[@]}" -print_final_stats=1 -artifact_prefix="$artifacts/" "$corpus" "fuzz/corpus/$t" "$build/seeds/$t" \
+    </dev/null >"$log" 2>&1 || rc=$?
+  # libFuzzer's last status line: "#N DONE cov: C ft: F corp: ..."; its stats: execs and exec/s.
+  status=$(grep -E '^#[0-9]+[[:space:]]+(DONE|pulse|NEW|REDUCE|INITED)' "$log" | tail -1 || true)
+  cov=$(echo "$status" | grep -oE 'cov: [0-9]+' | cut -d' ' -f2 || true)
+  ft=$(echo "$status" | grep -oE 'ft: [0-9]+' | cut -d' ' -f2 || true)
+  execs=$(grep -E '^stat::number_of_executed_units:' "$log" | awk '{print $2}' || true)
+  rate=$(grep -E '^stat::average_exec_per_sec:' "$log" | awk '{print $2}' || true)
+  result=ok
+  if [ $rc -ne 0 ]; then
+    result="FAILED (exit $rc; see $log and $artifacts/)"
+    failed+=("$t")
+    grep -E '^==[0-9]+==ERROR|runtime error|^SUMMARY|deadly signal|Test unit written' "$log" | head -5 || true
+  fi
+  summary+=("$(printf '%-8s %10s execs %7s exec/s  cov %6s  ft %7s  %s' "$t" "${execs:-?}" "${rate:-?}" "${cov:-?}" "${ft:-?}" "$result")")
+done
+
+echo "[fuzz] ${seconds}s per target:"
+printf '  %s\n' "${summary[@]}"
+if [ ${#failed[@]} -gt 0 ]; then
+  echo "[fuzz] findings in: ${failed[*]}"
+  exit 1
+fi
