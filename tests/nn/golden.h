@@ -12,6 +12,7 @@
 #include "nn/checkpoint/safetensors.h"
 #include "nn/checkpoint/state_dict_loader.h"
 #include "nn/checkpoint/tensor_map.h"
+#include "nn/schedulers/noise_source.h"
 
 namespace u3d::nn::test {
 
@@ -50,6 +51,26 @@ inline double relative_error(const torch::Tensor& a, const torch::Tensor& b) {
 
 // The golden README's acceptance for single fp32 forward passes.
 constexpr double kForwardTolerance = 1e-4;
+
+// Replays a golden pipeline run's noise in the order the pipeline draws it: "pipe.init_noise" first when
+// the pipeline draws its initial latents itself, then "pipe.step_noise.0", "pipe.step_noise.1", ...
+class GoldenPipelineNoise : public NoiseSource {
+ public:
+  GoldenPipelineNoise(TensorMap inputs, bool draws_initial_latents)
+      : inputs_(std::move(inputs)), initial_(draws_initial_latents) {}
+  torch::Tensor randn(at::IntArrayRef shape, torch::ScalarType dtype) override {
+    const int step = draws++ - (initial_ ? 1 : 0);
+    const std::string key = step < 0 ? "pipe.init_noise" : "pipe.step_noise." + std::to_string(step);
+    const torch::Tensor& n = inputs_.at(key);
+    EXPECT_EQ(n.sizes(), shape) << key;
+    return n.to(dtype);
+  }
+  int draws = 0;
+
+ private:
+  TensorMap inputs_;
+  bool initial_;
+};
 
 #define EXPECT_CLOSE_TO_GOLDEN(actual, expected, tol)                                  \
   do {                                                                                  \

@@ -19,20 +19,6 @@ using namespace u3d::nn::test;
 // The golden README's pipeline bounds: latents (up to ~70) 1e-3, everything else 1e-4.
 constexpr double kLatentTolerance = 1e-3;
 
-class ReplayNoise : public NoiseSource {
- public:
-  explicit ReplayNoise(TensorMap inputs) : inputs_(std::move(inputs)) {}
-  torch::Tensor randn(at::IntArrayRef shape, torch::ScalarType dtype) override {
-    const torch::Tensor& n = inputs_.at("pipe.step_noise." + std::to_string(draws++));
-    EXPECT_EQ(n.sizes(), shape);
-    return n.to(dtype);
-  }
-  int draws = 0;
-
- private:
-  TensorMap inputs_;
-};
-
 // The tiny CLIP, feature extractor (32 px), VAE and the SD scheduler as EulerAncestral, as the cases use.
 struct SharedModels {
   SharedModels()
@@ -96,7 +82,7 @@ TEST(ImageDiffusion, MultiViewPipelineMatchesTheOfficialTrace) {
   settings.steps = 2;
   settings.guidance_scale = 1.5;
   settings.initial_latents = in["pipe.init_noise"];
-  ReplayNoise noise(in);
+  GoldenPipelineNoise noise(in, /*draws_initial_latents=*/false);
   TensorMap trace;
   torch::Tensor images = run_image_diffusion(models, {in["pipe.test_image_uint8"]}, settings, noise, &trace);
   EXPECT_EQ(noise.draws, 2);
@@ -123,7 +109,7 @@ TEST(ImageDiffusion, NormalPipelineWithReferenceUNetMatchesTheOfficialTrace) {
   settings.steps = 2;
   settings.guidance_scale = 2.0;
   settings.initial_latents = in["pipe.init_noise"];
-  ReplayNoise noise(in);
+  GoldenPipelineNoise noise(in, /*draws_initial_latents=*/false);
   TensorMap trace;
   // The case's two condition images: the test image and its horizontal mirror.
   run_image_diffusion(models, {image, image.flip(1).contiguous()}, settings, noise, &trace);

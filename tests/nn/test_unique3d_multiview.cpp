@@ -16,23 +16,6 @@ namespace {
 using namespace u3d::nn::test;
 namespace fs = std::filesystem;
 
-// The golden run's initial latents, then its per-step noise, in the order the pipeline draws them.
-class ReplayNoise : public NoiseSource {
- public:
-  explicit ReplayNoise(TensorMap inputs) : inputs_(std::move(inputs)) {}
-  torch::Tensor randn(at::IntArrayRef shape, torch::ScalarType dtype) override {
-    const std::string key = draws == 0 ? "pipe.init_noise" : "pipe.step_noise." + std::to_string(draws - 1);
-    ++draws;
-    const torch::Tensor& n = inputs_.at(key);
-    EXPECT_EQ(n.sizes(), shape) << key;
-    return n.to(dtype);
-  }
-  int draws = 0;
-
- private:
-  TensorMap inputs_;
-};
-
 class MultiViewFolder : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -64,7 +47,7 @@ TEST_F(MultiViewFolder, ReproducesTheOfficialPipeline) {
   MultiViewSettings settings;
   settings.size = 32;
   settings.steps = 2;
-  ReplayNoise noise(in);
+  GoldenPipelineNoise noise(in, /*draws_initial_latents=*/true);
   torch::Tensor images = model->run(in["pipe.test_image_uint8"], settings, noise);
   EXPECT_EQ(noise.draws, 3);
   EXPECT_CLOSE_TO_GOLDEN(images, ref["pipe.images"], 1e-4);
@@ -77,7 +60,7 @@ TEST_F(MultiViewFolder, Bf16StaysClose) {
   MultiViewSettings settings;
   settings.size = 32;
   settings.steps = 2;
-  ReplayNoise noise(in);
+  GoldenPipelineNoise noise(in, /*draws_initial_latents=*/true);
   EXPECT_RELATIVE_TO_GOLDEN(model->run(in["pipe.test_image_uint8"], settings, noise), ref["pipe.images"], 2e-2);
 }
 

@@ -16,22 +16,6 @@ namespace {
 using namespace u3d::nn::test;
 namespace fs = std::filesystem;
 
-class ReplayNoise : public NoiseSource {
- public:
-  explicit ReplayNoise(TensorMap inputs) : inputs_(std::move(inputs)) {}
-  torch::Tensor randn(at::IntArrayRef shape, torch::ScalarType dtype) override {
-    const std::string key = draws == 0 ? "pipe.init_noise" : "pipe.step_noise." + std::to_string(draws - 1);
-    ++draws;
-    const torch::Tensor& n = inputs_.at(key);
-    EXPECT_EQ(n.sizes(), shape) << key;
-    return n.to(dtype);
-  }
-  int draws = 0;
-
- private:
-  TensorMap inputs_;
-};
-
 class NormalFolders : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -63,7 +47,7 @@ class NormalFolders : public ::testing::Test {
     NormalSettings settings;
     settings.size = 32;
     settings.steps = 2;
-    ReplayNoise noise(in);
+    GoldenPipelineNoise noise(in, /*draws_initial_latents=*/true);
     torch::Tensor images = model->run({image, image.flip(1).contiguous()}, settings, noise);
     EXPECT_EQ(noise.draws, 3);
     if (precision == Precision::kFp32)
