@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "core/error.h"
 #include "nn/checkpoint/config_json.h"
@@ -51,6 +53,30 @@ inline double relative_error(const torch::Tensor& a, const torch::Tensor& b) {
 
 // The golden README's acceptance for single fp32 forward passes.
 constexpr double kForwardTolerance = 1e-4;
+
+// Copies golden files into a model folder: {golden file, path inside `folder`} pairs.
+inline void copy_into_folder(const std::filesystem::path& folder,
+                             const std::vector<std::pair<std::filesystem::path, std::string>>& files) {
+  for (const auto& [from, to] : files) {
+    std::filesystem::create_directories((folder / to).parent_path());
+    std::filesystem::copy_file(from, folder / to);
+  }
+}
+
+// Writes the tiny sd-image-variations stand-in in the diffusers layout: the plain UNet (config and,
+// when `unet_weights`, weights), CLIP image encoder, VAE, the 32 px feature extractor and the SD scheduler.
+inline void write_image_variations_folder(const std::filesystem::path& folder, bool unet_weights) {
+  copy_into_folder(folder, {{golden_dir("unet_base") / "config.json", "unet/config.json"},
+                            {golden_dir("clip_vision") / "config.json", "image_encoder/config.json"},
+                            {golden_dir("clip_vision") / "weights.safetensors", "image_encoder/model.safetensors"},
+                            {golden_dir("vae") / "config.json", "vae/config.json"},
+                            {golden_dir("vae") / "weights.safetensors", "vae/diffusion_pytorch_model.safetensors"},
+                            {golden_dir("clip_vision") / "preprocessor_config_tiny32.json",
+                             "feature_extractor/preprocessor_config.json"},
+                            {golden_dir("scheduler") / "sd_scheduler_config.json", "scheduler/scheduler_config.json"}});
+  if (unet_weights)
+    copy_into_folder(folder, {{golden_dir("unet_base") / "weights.safetensors", "unet/diffusion_pytorch_model.safetensors"}});
+}
 
 // Replays a golden pipeline run's noise in the order the pipeline draws it: "pipe.init_noise" first when
 // the pipeline draws its initial latents itself, then "pipe.step_noise.0", "pipe.step_noise.1", ...

@@ -21,19 +21,9 @@ class MultiViewFolder : public ::testing::Test {
   void SetUp() override {
     root = fs::temp_directory_path() / ("u3d_test_img2mvimg_" + std::to_string(::getpid()));
     fs::remove_all(root);
-    auto put = [&](const fs::path& from, const fs::path& to) {
-      fs::create_directories((root / to).parent_path());
-      fs::copy_file(from, root / to);
-    };
-    // The sd-image-variations stand-in (plain UNet config) plus Unique3D's unet_state_dict.pth.
-    put(golden_dir("unet_base") / "config.json", "unet/config.json");
-    put(golden_dir("unet_mv") / "weights.pth", "unet_state_dict.pth");
-    put(golden_dir("clip_vision") / "config.json", "image_encoder/config.json");
-    put(golden_dir("clip_vision") / "weights.safetensors", "image_encoder/model.safetensors");
-    put(golden_dir("vae") / "config.json", "vae/config.json");
-    put(golden_dir("vae") / "weights.safetensors", "vae/diffusion_pytorch_model.safetensors");
-    put(golden_dir("clip_vision") / "preprocessor_config_tiny32.json", "feature_extractor/preprocessor_config.json");
-    put(golden_dir("scheduler") / "sd_scheduler_config.json", "scheduler/scheduler_config.json");
+    // The sd-image-variations stand-in plus Unique3D's unet_state_dict.pth (ckpt/img2mvimg holds both).
+    write_image_variations_folder(root, /*unet_weights=*/false);
+    copy_into_folder(root, {{golden_dir("unet_mv") / "weights.pth", "unet_state_dict.pth"}});
   }
   void TearDown() override { fs::remove_all(root); }
   fs::path root;

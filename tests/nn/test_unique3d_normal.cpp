@@ -23,18 +23,7 @@ class NormalFolders : public ::testing::Test {
     base = root / "sd-image-variations-diffusers";
     unique3d = root / "image2normal";
     fs::remove_all(root);
-    auto put = [&](const fs::path& from, const fs::path& to) {
-      fs::create_directories((base / to).parent_path());
-      fs::copy_file(from, base / to);
-    };
-    put(golden_dir("unet_base") / "config.json", "unet/config.json");
-    put(golden_dir("unet_base") / "weights.safetensors", "unet/diffusion_pytorch_model.safetensors");
-    put(golden_dir("clip_vision") / "config.json", "image_encoder/config.json");
-    put(golden_dir("clip_vision") / "weights.safetensors", "image_encoder/model.safetensors");
-    put(golden_dir("vae") / "config.json", "vae/config.json");
-    put(golden_dir("vae") / "weights.safetensors", "vae/diffusion_pytorch_model.safetensors");
-    put(golden_dir("clip_vision") / "preprocessor_config_tiny32.json", "feature_extractor/preprocessor_config.json");
-    put(golden_dir("scheduler") / "sd_scheduler_config.json", "scheduler/scheduler_config.json");
+    write_image_variations_folder(base, /*unet_weights=*/true);
     fs::create_directories(unique3d);
   }
   void TearDown() override { fs::remove_all(root); }
