@@ -26,32 +26,31 @@ class MultiViewFolder : public ::testing::Test {
     copy_into_folder(root, {{golden_dir("unet_mv") / "weights.pth", "unet_state_dict.pth"}});
   }
   void TearDown() override { fs::remove_all(root); }
+
+  // The golden case's 2-step run through the stage loaded from the folder.
+  torch::Tensor run_golden(MultiViewModel& model) {
+    auto in = golden_tensors("unet_mv", "inputs");
+    MultiViewSettings settings;
+    settings.size = 32;
+    settings.steps = 2;
+    GoldenPipelineNoise noise(in, /*draws_initial_latents=*/true);
+    torch::Tensor images = model.run(in["pipe.test_image_uint8"], settings, noise);
+    EXPECT_EQ(noise.draws, 3);
+    return images;
+  }
+
   fs::path root;
 };
 
 TEST_F(MultiViewFolder, ReproducesTheOfficialPipeline) {
   auto model = MultiViewModel::load(root, Precision::kFp32);
   EXPECT_EQ(model->unet->config.in_channels, 8);
-  auto in = golden_tensors("unet_mv", "inputs");
-  auto ref = golden_tensors("unet_mv", "outputs");
-  MultiViewSettings settings;
-  settings.size = 32;
-  settings.steps = 2;
-  GoldenPipelineNoise noise(in, /*draws_initial_latents=*/true);
-  torch::Tensor images = model->run(in["pipe.test_image_uint8"], settings, noise);
-  EXPECT_EQ(noise.draws, 3);
-  EXPECT_CLOSE_TO_GOLDEN(images, ref["pipe.images"], 1e-4);
+  EXPECT_CLOSE_TO_GOLDEN(run_golden(*model), golden_tensors("unet_mv", "outputs")["pipe.images"], 1e-4);
 }
 
 TEST_F(MultiViewFolder, Bf16StaysClose) {
   auto model = MultiViewModel::load(root, Precision::kBf16);
-  auto in = golden_tensors("unet_mv", "inputs");
-  auto ref = golden_tensors("unet_mv", "outputs");
-  MultiViewSettings settings;
-  settings.size = 32;
-  settings.steps = 2;
-  GoldenPipelineNoise noise(in, /*draws_initial_latents=*/true);
-  EXPECT_RELATIVE_TO_GOLDEN(model->run(in["pipe.test_image_uint8"], settings, noise), ref["pipe.images"], 2e-2);
+  EXPECT_RELATIVE_TO_GOLDEN(run_golden(*model), golden_tensors("unet_mv", "outputs")["pipe.images"], 2e-2);
 }
 
 TEST_F(MultiViewFolder, MissingOrMismatchedFilesAreNamed) {

@@ -45,8 +45,8 @@ struct ConditioningModels {
   std::unique_ptr<Scheduler> scheduler;
 };
 
-// Checks that every file is in `folder` before reading any weights (an Error names the first missing
-// one), then loads and converts to `precision`.
+// Checks that `precision` runs on the CPU and that every file is in `folder` before reading any weights
+// (an Error names the problem or the first missing file), then loads and converts to `precision`.
 ConditioningModels load_conditioning_models(const DiffusersFolder& folder, Precision precision);
 
 struct ImageDiffusionModels {

@@ -15,7 +15,6 @@ constexpr int64_t kViews = 4;
 }  // namespace
 
 std::unique_ptr<MultiViewModel> MultiViewModel::load(const std::filesystem::path& root, Precision precision) {
-  check_precision_supported(precision, torch::kCPU);
   const DiffusersFolder folder(root);
   // The UNet's files are checked before load_conditioning_models reads any weights.
   const auto unet_config = folder.component_config("unet");

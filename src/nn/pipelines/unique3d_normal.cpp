@@ -9,7 +9,6 @@ namespace u3d::nn {
 
 std::unique_ptr<NormalModel> NormalModel::load(const std::filesystem::path& image_variations,
                                                const std::filesystem::path& image2normal, Precision precision) {
-  check_precision_supported(precision, torch::kCPU);
   const DiffusersFolder base(image_variations);
   const DiffusersFolder unique3d(image2normal);
   const auto unet_config = base.component_config("unet");
