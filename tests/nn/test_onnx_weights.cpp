@@ -98,8 +98,11 @@ TEST_F(OnnxReader, TypedFieldsAndNodes) {
   Proto graph;
   graph.message(1, conv_node("/c/Conv", {"x", "w16", "b"}));
   // FLOAT16 in int32_data (packed), the name after the data; FLOAT in unpacked float_data; INT64 packed.
-  graph.message(5, Proto().bytes(1, Proto::packed_varints({2})).varint(2, 10)
-                       .bytes(5, Proto::packed_varints({0x3c00, 0xc000})).bytes(8, "w16"));
+  graph.message(5, Proto()
+                       .bytes(1, Proto::packed_varints({2}))
+                       .varint(2, 10)
+                       .bytes(5, Proto::packed_varints({0x3c00, 0xc000}))
+                       .bytes(8, "w16"));
   graph.message(5, Proto().varint(1, 2).varint(2, 1).fixed32(4, 1.5f).fixed32(4, -0.25f).bytes(8, "b"));
   graph.message(5, Proto().varint(1, 3).varint(2, 7).bytes(7, Proto::packed_varints({1, 2, 300})).bytes(8, "shape"));
   const OnnxGraph g = load_onnx(write("typed.onnx", graph));
@@ -158,8 +161,11 @@ TEST(OnnxConvOrder, ChecksCountNamesAndBatchNorm) {
   expect_error([&] { conv_weights_in_graph_order(g, {"b", "a"}, "f.onnx"); }, {"f.onnx", "b.weight", "another layer"});
   OnnxGraph computed = g;
   computed.nodes[1].inputs[1] = "computed_weight";
-  expect_error([&] { conv_weights_in_graph_order(computed, {"a", "b"}, "f.onnx"); },
-               {"f.onnx", "computed_weight", "not an initializer"});
+  expect_error(
+      [&] {
+        conv_weights_in_graph_order(computed, {"a", "b"}, "f.onnx");
+      },
+      {"f.onnx", "computed_weight", "not an initializer"});
   OnnxGraph bn = g;
   bn.nodes.push_back({"/bn", "BatchNormalization", {"z"}, {"w"}});
   expect_error([&] { conv_weights_in_graph_order(bn, {"a", "b"}, "f.onnx"); }, {"f.onnx", "BatchNormalization"});

@@ -37,9 +37,10 @@ TEST(U2Net, Div8MatchesTheReferenceFromEveryFormat) {
     EXPECT_EQ(net->config.stages[6].in, 128);
     const std::vector<torch::Tensor> out = net->forward(input);
     ASSERT_EQ(out.size(), 7u);
+    const char* names[] = {"d0", "d1", "d2", "d3", "d4", "d5", "d6"};
     for (int i = 0; i < 7; ++i) {
-      SCOPED_TRACE("d" + std::to_string(i));
-      EXPECT_CLOSE_TO_GOLDEN(out[i], expected.at("d" + std::to_string(i)), kMaskTolerance);
+      SCOPED_TRACE(names[i]);
+      EXPECT_CLOSE_TO_GOLDEN(out[i], expected.at(names[i]), kMaskTolerance);
     }
   }
 }
@@ -110,7 +111,8 @@ TEST(U2Net, WrongOrIncompleteFilesNameTheTensor) {
   TensorMap folded = load_safetensors(kU2NetDiv8 / "weights.safetensors");
   fold_rebnconv_batchnorm(folded, "w");
   folded["stage2.rebnconv3.conv_s1.weight"] = torch::zeros({4, 5, 3, 3});
-  expect_error([&] { build_u2net(folded, "wide.safetensors"); }, {"wide.safetensors", "stage2.rebnconv3.conv_s1.weight"});
+  expect_error([&] { build_u2net(folded, "wide.safetensors"); },
+               {"wide.safetensors", "stage2.rebnconv3.conv_s1.weight"});
 }
 
 }  // namespace

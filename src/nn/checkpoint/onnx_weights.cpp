@@ -27,8 +27,8 @@ enum Wire : uint32_t { kVarint = 0, kFixed64 = 1, kLengthDelimited = 2, kFixed32
 struct Field {
   uint32_t number = 0;
   Wire wire = kVarint;
-  uint64_t varint = 0;         // kVarint, kFixed64, kFixed32
-  std::string_view bytes;      // kLengthDelimited
+  uint64_t varint = 0;     // kVarint, kFixed64, kFixed32
+  std::string_view bytes;  // kLengthDelimited
 };
 
 // Reads the fields of one protobuf message. Every read is bounds-checked; errors name `where`.
@@ -63,8 +63,7 @@ class Message {
         pos_ += n;
         break;
       }
-      default:
-        throw Error(where_ + ": corrupt protobuf (wire type " + std::to_string(key & 7) + ")");
+      default: throw Error(where_ + ": corrupt protobuf (wire type " + std::to_string(key & 7) + ")");
     }
     return f;
   }
@@ -223,10 +222,14 @@ OnnxNode parse_node(std::string_view bytes, const std::string& source) {
     if (f->number < kNodeInput || f->number > kNodeOpType) continue;
     expect_wire(*f, kLengthDelimited, source + ": node '" + node.name + "'", "a string field");
     std::string s = to_string(f->bytes);
-    if (f->number == kNodeInput) node.inputs.push_back(std::move(s));
-    else if (f->number == kNodeOutput) node.outputs.push_back(std::move(s));
-    else if (f->number == kNodeName) node.name = std::move(s);
-    else node.op_type = std::move(s);
+    if (f->number == kNodeInput)
+      node.inputs.push_back(std::move(s));
+    else if (f->number == kNodeOutput)
+      node.outputs.push_back(std::move(s));
+    else if (f->number == kNodeName)
+      node.name = std::move(s);
+    else
+      node.op_type = std::move(s);
   }
   return node;
 }
@@ -280,8 +283,9 @@ TensorMap conv_weights_in_graph_order(const OnnxGraph& graph, const std::vector<
   std::vector<const OnnxNode*> convs;
   for (const auto& node : graph.nodes) {
     require(node.op_type != "BatchNormalization",
-            source + ": node '" + node.name + "' is an unfolded BatchNormalization; only exports with BatchNorm "
-                     "folded into the convolutions (torch.onnx.export in eval mode) are read");
+            source + ": node '" + node.name +
+                "' is an unfolded BatchNormalization; only exports with BatchNorm "
+                "folded into the convolutions (torch.onnx.export in eval mode) are read");
     if (node.op_type == "Conv") convs.push_back(&node);
   }
   require(convs.size() == conv_modules.size(),
@@ -296,15 +300,15 @@ TensorMap conv_weights_in_graph_order(const OnnxGraph& graph, const std::vector<
   for (size_t i = 0; i < convs.size(); ++i) {
     const OnnxNode& node = *convs[i];
     const std::string& module = conv_modules[i];
-    const std::string where = source + ": Conv node " + std::to_string(i) + " ('" + node.name + "', the network's " +
-                              module + ")";
+    const std::string where =
+        source + ": Conv node " + std::to_string(i) + " ('" + node.name + "', the network's " + module + ")";
     require(node.inputs.size() >= 2, where + " has no weight input");
     for (size_t k = 1; k < node.inputs.size() && k < 3; ++k) {
       const std::string& input = node.inputs[k];
       const char* suffix = k == 1 ? ".weight" : ".bias";
       auto it = graph.initializers.find(input);
-      require(it != graph.initializers.end(), where + ": its " + std::string(suffix + 1) + " '" + input +
-                                                  "' is not an initializer");
+      require(it != graph.initializers.end(),
+              where + ": its " + std::string(suffix + 1) + " '" + input + "' is not an initializer");
       if (ends_with(input, suffix)) {
         const std::string named = input.substr(0, input.size() - std::strlen(suffix));
         require(!position.count(named) || named == module,

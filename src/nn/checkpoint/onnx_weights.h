@@ -28,7 +28,7 @@ struct OnnxNode {
 };
 
 struct OnnxGraph {
-  TensorMap initializers;  // as stored: fp16 stays fp16
+  TensorMap initializers;       // as stored: fp16 stays fp16
   std::vector<OnnxNode> nodes;  // in graph order
 };
 

@@ -61,7 +61,7 @@ U2NetConfig U2NetConfig::layout(bool isnet) {
   U2NetConfig c;
   c.isnet = isnet;
   const int64_t first_in = isnet ? 64 : 3;
-  c.stages = {{first_in, 16, 64}, {64, 16, 64}, {64, 16, 64}, {64, 16, 64}, {64, 16, 64}, {64, 16, 64},
+  c.stages = {{first_in, 16, 64}, {64, 16, 64},  {64, 16, 64},  {64, 16, 64},  {64, 16, 64}, {64, 16, 64},
               {128, 16, 64},      {128, 16, 64}, {128, 16, 64}, {128, 16, 64}, {128, 16, 64}};
   return c;
 }
@@ -69,10 +69,12 @@ U2NetConfig U2NetConfig::layout(bool isnet) {
 void fold_rebnconv_batchnorm(TensorMap& weights, const std::string& source) {
   std::vector<std::string> blocks;
   for (const auto& [key, value] : weights)
-    if (ends_with(key, ".bn_s1.weight")) blocks.push_back(key.substr(0, key.size() - std::string(".bn_s1.weight").size()));
+    if (ends_with(key, ".bn_s1.weight"))
+      blocks.push_back(key.substr(0, key.size() - std::string(".bn_s1.weight").size()));
   auto take = [&](const std::string& key) {
     auto it = weights.find(key);
-    require(it != weights.end(), source + ": no tensor '" + key + "' (a BatchNorm or conv of the checkpoint is incomplete)");
+    require(it != weights.end(),
+            source + ": no tensor '" + key + "' (a BatchNorm or conv of the checkpoint is incomplete)");
     torch::Tensor t = it->second.to(torch::kDouble);
     weights.erase(it);
     return t;
@@ -113,8 +115,8 @@ RsuImpl::RsuImpl(int levels, bool dilated_, const RsuWidths& w, const torch::Ten
   for (int i = 1; i <= levels; ++i) {
     // RSU4F dilates 1, 2, 4, 8; RSU-L only its deepest conv, by 2.
     const int64_t dilation = dilated ? (int64_t{1} << (i - 1)) : (i == levels ? 2 : 1);
-    encoder.push_back(register_module("rebnconv" + std::to_string(i),
-                                      RebnConv(i == 1 ? w.out : w.mid, w.mid, dilation, o)));
+    encoder.push_back(
+        register_module("rebnconv" + std::to_string(i), RebnConv(i == 1 ? w.out : w.mid, w.mid, dilation, o)));
   }
   for (int i = levels - 1; i >= 1; --i) {
     const int64_t dilation = dilated ? (int64_t{1} << (i - 1)) : 1;

@@ -73,9 +73,9 @@ class RsuImpl : public torch::nn::Module {
  public:
   RsuImpl(int levels, bool dilated, const RsuWidths& widths, const torch::TensorOptions& options);
   torch::Tensor forward(const torch::Tensor& x);
-  RebnConv conv_in{nullptr};        // registered as rebnconvin
-  std::vector<RebnConv> encoder;    // rebnconv1..L
-  std::vector<RebnConv> decoder;    // rebnconv(L-1)d..1d
+  RebnConv conv_in{nullptr};      // registered as rebnconvin
+  std::vector<RebnConv> encoder;  // rebnconv1..L
+  std::vector<RebnConv> decoder;  // rebnconv(L-1)d..1d
   bool dilated;
 };
 TORCH_MODULE(Rsu);

@@ -68,12 +68,12 @@ torch::Tensor matting_input(const torch::Tensor& rgb, const U2NetConfig& config,
   }
   torch::Tensor a = pil_resize(rgb, resolution, resolution, PilFilter::Lanczos).to(torch::kDouble);
   a = a / std::max(a.max().item<double>(), 1e-6);
-  const torch::Tensor mean = config.isnet ? torch::full({3}, 0.5, torch::kDouble)
-                                          : torch::tensor({kImageNetMean[0], kImageNetMean[1], kImageNetMean[2]},
-                                                          torch::kDouble);
-  const torch::Tensor deviation = config.isnet ? torch::ones({3}, torch::kDouble)
-                                         : torch::tensor({kImageNetStd[0], kImageNetStd[1], kImageNetStd[2]},
-                                                         torch::kDouble);
+  const torch::Tensor mean =
+      config.isnet ? torch::full({3}, 0.5, torch::kDouble)
+                   : torch::tensor({kImageNetMean[0], kImageNetMean[1], kImageNetMean[2]}, torch::kDouble);
+  const torch::Tensor deviation =
+      config.isnet ? torch::ones({3}, torch::kDouble)
+                   : torch::tensor({kImageNetStd[0], kImageNetStd[1], kImageNetStd[2]}, torch::kDouble);
   return ((a - mean) / deviation).permute({2, 0, 1}).unsqueeze(0).to(torch::kFloat).contiguous();
 }
 
