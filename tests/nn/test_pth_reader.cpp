@@ -237,3 +237,20 @@ TEST_F(PthTest, LegacyAndForeignFiles) {
   expect_error(text, {"notes.pth", "not a PyTorch zip checkpoint"});
   expect_error(dir_ / "missing.pth", {"missing.pth"});
 }
+
+// basicsr's checkpoints (RealESRGAN_x4plus.pth) wrap the state dict: {"params_ema": OrderedDict(...)}.
+TEST_F(PthTest, NestedStateDictKeysArePrefixed) {
+  const torch::Tensor w = torch::arange(6, torch::kFloat32);
+  PickleWriter p;
+  p.op('}').mark().str("params_ema").empty_ordered_dict().mark();
+  p.str("conv_first.weight").tensor("FloatStorage", "0", 6, 0, {2, 3}, {3, 1}).op('u');
+  p.op('u');
+  const TensorMap m = load_pth(write_pth("nested", p.finish(), {{"0", raw_bytes(w)}}));
+  ASSERT_EQ(m.size(), 1u);
+  EXPECT_TRUE(torch::equal(m.at("params_ema.conv_first.weight"), w.view({2, 3})));
+
+  // Only one level: a dict inside the inner state dict is not a tensor.
+  PickleWriter deeper;
+  deeper.op('}').mark().str("params").op('}').mark().str("inner").op('}').op('u').op('u');
+  expect_error(write_pth("deeper", deeper.finish(), {}), {"deeper.pth", "params.inner", "not a tensor"});
+}

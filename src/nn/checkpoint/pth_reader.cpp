@@ -203,6 +203,25 @@ torch::Tensor materialize(const TensorRef& ref, StorageCache& storages, const st
       .set_(storage, ref.offset, ref.sizes, ref.strides);
 }
 
+// Adds the tensors of `dict` under prefix + key; a nested dict (basicsr's {"params_ema": state dict}) adds
+// its tensors under "<key>.".
+void add_entries(const pickle::Dict& dict, const std::string& prefix, StorageCache& storages,
+                 const std::string& source, TensorMap& tensors) {
+  for (const auto& [key, value] : dict.items) {
+    require(key.is<std::string>(), source + ": state dict key is a " + key.type_name());
+    const std::string name = prefix + key.as<std::string>();
+    if (value.is<std::shared_ptr<pickle::Dict>>() && prefix.empty()) {
+      add_entries(*value.as<std::shared_ptr<pickle::Dict>>(), name + ".", storages, source, tensors);
+      continue;
+    }
+    auto ref = value.is<std::shared_ptr<const pickle::Object>>()
+                   ? std::dynamic_pointer_cast<const TensorRef>(value.as<std::shared_ptr<const pickle::Object>>())
+                   : nullptr;
+    require(ref != nullptr, source + ": entry '" + name + "' is a " + value.type_name() + ", not a tensor");
+    tensors[name] = materialize(*ref, storages, source, name);
+  }
+}
+
 }  // namespace
 
 TensorMap load_pth(const std::filesystem::path& path) {
@@ -225,15 +244,7 @@ TensorMap load_pth(const std::filesystem::path& path) {
 
     StorageCache storages(reader, source);
     TensorMap tensors;
-    for (const auto& [key, value] : root.as<std::shared_ptr<pickle::Dict>>()->items) {
-      require(key.is<std::string>(), source + ": state dict key is a " + key.type_name());
-      const std::string& name = key.as<std::string>();
-      auto ref = value.is<std::shared_ptr<const pickle::Object>>()
-                     ? std::dynamic_pointer_cast<const TensorRef>(value.as<std::shared_ptr<const pickle::Object>>())
-                     : nullptr;
-      require(ref != nullptr, source + ": entry '" + name + "' is a " + value.type_name() + ", not a tensor");
-      tensors[name] = materialize(*ref, storages, source, name);
-    }
+    add_entries(*root.as<std::shared_ptr<pickle::Dict>>(), "", storages, source, tensors);
     return tensors;
   } catch (const c10::Error& e) {
     const std::string what = e.what_without_backtrace();

@@ -1,6 +1,8 @@
 #pragma once
 // PyTorch checkpoints in the zip format of torch.save (torch >= 1.6; also diffusers' *.bin weights),
-// holding one flat state dict {name: tensor}, e.g. Unique3D's ckpt/img2mvimg/unet_state_dict.pth.
+// holding one flat state dict {name: tensor}, e.g. Unique3D's ckpt/img2mvimg/unet_state_dict.pth, or a
+// dict of such state dicts, as basicsr saves them ({"params_ema": {...}}, e.g. RealESRGAN_x4plus.pth),
+// whose tensors are returned as "<outer key>.<name>".
 //
 // The pickle is read by a restricted reader that only knows collections.OrderedDict,
 // torch._utils._rebuild_tensor_v2 / _rebuild_parameter and the typed storages torch.<T>Storage

@@ -1,0 +1,70 @@
+#include "nn/pipelines/upscale.h"
+
+#include <string>
+
+#include "core/error.h"
+#include "core/progress.h"
+
+namespace u3d::nn {
+namespace {
+
+// ITU-R BT.601 luma, OpenCV's RGB -> grey weights (the wrapper's cvtColor on the alpha output).
+torch::Tensor luma(const torch::Tensor& rgb) {
+  return 0.299 * rgb.select(1, 0) + 0.587 * rgb.select(1, 1) + 0.114 * rgb.select(1, 2);
+}
+
+torch::Tensor to_uint8(const torch::Tensor& unit) { return (unit * 255.0).round().to(torch::kUInt8); }
+
+}  // namespace
+
+torch::Tensor upscale_tiled(RRDBNetImpl& net, const torch::Tensor& x, int64_t tile, const std::string& stage) {
+  torch::NoGradGuard no_grad;
+  const int64_t h = x.size(2), w = x.size(3);
+  if (tile <= 0 || (h <= tile && w <= tile)) {
+    progress_step(stage, 1, 1);
+    return net.forward(x);
+  }
+  const int64_t s = kUpscaleFactor;
+  const int64_t tiles_y = (h + tile - 1) / tile, tiles_x = (w + tile - 1) / tile;
+  torch::Tensor out = torch::empty({x.size(0), net.config.out_channels, h * s, w * s}, x.options());
+  int done = 0;
+  for (int64_t ty = 0; ty < tiles_y; ++ty) {
+    for (int64_t tx = 0; tx < tiles_x; ++tx) {
+      // The tile, and the tile with its context, in input pixels.
+      const int64_t y0 = ty * tile, y1 = std::min(y0 + tile, h), x0 = tx * tile, x1 = std::min(x0 + tile, w);
+      const int64_t py0 = std::max<int64_t>(y0 - kTilePad, 0), py1 = std::min(y1 + kTilePad, h);
+      const int64_t px0 = std::max<int64_t>(x0 - kTilePad, 0), px1 = std::min(x1 + kTilePad, w);
+      const torch::Tensor result = net.forward(x.slice(2, py0, py1).slice(3, px0, px1));
+      out.slice(2, y0 * s, y1 * s)
+          .slice(3, x0 * s, x1 * s)
+          .copy_(result.slice(2, (y0 - py0) * s, (y1 - py0) * s).slice(3, (x0 - px0) * s, (x1 - px0) * s));
+      progress_step(stage, ++done, static_cast<int>(tiles_x * tiles_y));
+    }
+  }
+  return out;
+}
+
+std::unique_ptr<UpscaleModel> UpscaleModel::load(const std::filesystem::path& path, Precision precision) {
+  check_precision_supported(precision, torch::kCPU);
+  auto m = std::make_unique<UpscaleModel>();
+  m->net = load_rrdbnet(path);
+  require(m->net->config.in_channels == 3 && m->net->config.out_channels == 3,
+          path.string() + ": an RRDBNet with " + std::to_string(m->net->config.in_channels) + " input and " +
+              std::to_string(m->net->config.out_channels) + " output channels; the upscaler needs RGB to RGB");
+  set_precision(*m->net, precision);
+  return m;
+}
+
+torch::Tensor UpscaleModel::upscale(const torch::Tensor& image) {
+  require(image.dim() == 3 && (image.size(2) == 3 || image.size(2) == 4) && image.scalar_type() == torch::kUInt8,
+          "upscale: expected a uint8 RGB or RGBA image [H, W, 3|4]");
+  torch::NoGradGuard no_grad;
+  const torch::Tensor unit = image.permute({2, 0, 1}).unsqueeze(0).to(torch::kFloat) / 255.0;
+  const torch::Tensor rgb = upscale_tiled(*net, unit.slice(1, 0, 3), tile, "upscale").clamp(0.0, 1.0);
+  if (image.size(2) == 3) return to_uint8(rgb[0].permute({1, 2, 0})).contiguous();
+  const torch::Tensor alpha_in = unit.slice(1, 3, 4).expand({1, 3, image.size(0), image.size(1)});
+  const torch::Tensor alpha = luma(upscale_tiled(*net, alpha_in, tile, "upscale alpha").clamp(0.0, 1.0));
+  return to_uint8(torch::cat({rgb, alpha.unsqueeze(1)}, 1)[0].permute({1, 2, 0})).contiguous();
+}
+
+}  // namespace u3d::nn

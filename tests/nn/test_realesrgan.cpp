@@ -1,0 +1,146 @@
+// RRDBNet (Real-ESRGAN x4) against the realesrgan_tiny golden case, loaded from basicsr-named safetensors and
+// from both ONNX exports; the tiled upscaler against the untiled network; the uint8 RGB/RGBA wrapper.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <fstream>
+
+#include "core/progress.h"
+#include "golden.h"
+#include "nn/checkpoint/onnx_weights.h"
+#include "nn/models/rrdbnet.h"
+#include "nn/pipelines/upscale.h"
+
+namespace u3d::nn {
+namespace {
+
+using namespace u3d::nn::test;
+namespace fs = std::filesystem;
+
+// The golden case asks for 1e-5 on the raw output (max |value| 5.6; OpenCV DNN vs torch: 4.7e-6).
+constexpr double kRealEsrganTolerance = 1e-5;
+
+TEST(RealEsrgan, TinyMatchesTheReferenceFromEveryFormat) {
+  torch::NoGradGuard no_grad;
+  const torch::Tensor input = golden_tensors("realesrgan_tiny", "inputs").at("input");
+  const torch::Tensor expected = golden_tensors("realesrgan_tiny", "outputs").at("output");
+  for (const char* file : {"weights.safetensors", "rrdbnet_tiny_op11.onnx", "rrdbnet_tiny_op17.onnx"}) {
+    SCOPED_TRACE(file);
+    RRDBNet net = load_rrdbnet(golden_dir("realesrgan_tiny") / file);
+    EXPECT_EQ(net->config.num_feat, 8);
+    EXPECT_EQ(net->config.num_block, 1);
+    EXPECT_EQ(net->config.num_grow, 4);
+    EXPECT_CLOSE_TO_GOLDEN(net->forward(input), expected, kRealEsrganTolerance);
+  }
+}
+
+TEST(RealEsrgan, OnnxInitializersAreTheStateDict) {
+  const OnnxGraph graph = load_onnx(golden_dir("realesrgan_tiny") / "rrdbnet_tiny_op17.onnx");
+  const TensorMap reference = golden_tensors("realesrgan_tiny", "weights");
+  RRDBNet layout(RRDBNetConfig::from_weights(reference, "weights"), torch::TensorOptions().device(torch::kMeta));
+  const TensorMap mapped = conv_weights_in_graph_order(graph, conv_module_names(*layout), "op17");
+  ASSERT_EQ(mapped.size(), reference.size());
+  for (const auto& [name, tensor] : reference) EXPECT_TRUE(torch::equal(mapped.at(name), tensor)) << name;
+}
+
+class RealEsrganFiles : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("u3d_esrgan_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  // The first `keep` bytes of a golden file, written to dir_/name.
+  fs::path truncated_copy(const fs::path& from, size_t keep, const std::string& name) {
+    std::ifstream in(from, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), {});
+    const fs::path path = dir_ / name;
+    std::ofstream(path, std::ios::binary).write(bytes.data(), std::streamsize(std::min(keep, bytes.size())));
+    return path;
+  }
+
+  template <class F>
+  static void expect_error(F&& load, std::initializer_list<std::string> fragments) {
+    try {
+      load();
+      ADD_FAILURE() << "no error";
+    } catch (const u3d::Error& e) {
+      const std::string msg = e.what();
+      for (const auto& f : fragments) EXPECT_NE(msg.find(f), std::string::npos) << "'" << f << "' not in: " << msg;
+    }
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(RealEsrganFiles, TruncatedOnnxNamesTheFile) {
+  const fs::path op17 = golden_dir("realesrgan_tiny") / "rrdbnet_tiny_op17.onnx";
+  for (size_t keep : {size_t{5}, size_t{20000}, fs::file_size(op17) - 3}) {
+    const fs::path path = truncated_copy(op17, keep, "cut.onnx");
+    expect_error([&] { load_rrdbnet(path); }, {"cut.onnx", "truncated"});
+  }
+}
+
+TEST_F(RealEsrganFiles, WrongArchitectureNamesTheFileAndTensor) {
+  // A U^2-Net export: the Conv count does not fit an RRDBNet.
+  const fs::path u2net = golden_dir("u2net_tiny") / "u2net_div8" / "u2net_div8_op17.onnx";
+  expect_error([&] { load_rrdbnet(u2net); }, {"u2net_div8_op17.onnx", "Conv nodes"});
+  // A U^2-Net state dict: the first RRDBNet tensor is missing.
+  const fs::path u2net_st = golden_dir("u2net_tiny") / "u2net_div8" / "weights.safetensors";
+  expect_error([&] { load_rrdbnet(u2net_st); }, {"weights.safetensors", "conv_first.weight"});
+}
+
+// Tiles of 200 input pixels (so the last one is smaller) over a 512 px image, each with the wrapper's 10 px
+// of context, against one run over the whole image, with the tiny golden weights (random, output O(1)).
+// The tiny network sees 18 input pixels around each pixel (1 + 15 + 1 convs at 1x, 4 at 2x and 4x), so a
+// pixel at least 18 - 10 = 8 input pixels from a tile edge sees exactly what it sees untiled.
+TEST(RealEsrgan, TilesEqualTheWholeImageAwayFromSeams) {
+  torch::NoGradGuard no_grad;
+  set_progress_quiet(true);
+  RRDBNet net = load_rrdbnet(golden_dir("realesrgan_tiny") / "weights.safetensors");
+  torch::manual_seed(3);
+  const torch::Tensor image = torch::rand({1, 3, 512, 512});
+  const torch::Tensor whole = upscale_tiled(*net, image, 0, "test");
+  const torch::Tensor tiled = upscale_tiled(*net, image, 200, "test");
+  ASSERT_EQ(tiled.sizes(), whole.sizes());
+
+  // Distance in input pixels of each output row/column to the nearest seam (tile edges at 200 and 400).
+  const torch::Tensor pos = torch::arange(512 * 4, torch::kLong).div(4, "floor");
+  torch::Tensor dist = torch::full_like(pos, 1 << 20);
+  for (int64_t edge : {200, 400}) dist = torch::minimum(dist, torch::where(pos < edge, edge - 1 - pos, pos - edge));
+  const torch::Tensor far = (dist >= 8).view({-1, 1}) & (dist >= 8).view({1, -1});
+  const torch::Tensor diff = (tiled - whole).abs().amax(1)[0];
+  const double far_err = diff.masked_select(far).max().item<double>();
+  const double near_err = diff.max().item<double>();
+  const double range = whole.abs().max().item<double>();
+  std::printf("  tiled vs whole: max abs %.3g away from seams, %.3g next to them (outputs up to %.2f)\n", far_err,
+              near_err, range);
+  EXPECT_LE(far_err, 1e-4);
+  // Seam-free: next to a seam the tiles miss at most 8 pixels of context; the difference that leaves is far
+  // below the output's own pixel-to-pixel variation, so no edge shows where tiles meet.
+  const double neighbour_step = (whole.slice(3, 1) - whole.slice(3, 0, -1)).abs().mean().item<double>();
+  std::printf("  mean step between neighbouring output pixels %.3g\n", neighbour_step);
+  EXPECT_LE(near_err, 0.1 * neighbour_step);
+}
+
+TEST(RealEsrgan, RgbaKeepsAnUpscaledAlpha) {
+  set_progress_quiet(true);
+  UpscaleModel model;
+  model.net = load_rrdbnet(golden_dir("realesrgan_tiny") / "weights.safetensors");
+  torch::manual_seed(4);
+  const torch::Tensor rgba = torch::randint(0, 256, {12, 16, 4}, torch::kUInt8);
+  const torch::Tensor out = model.upscale(rgba);
+  ASSERT_EQ(out.sizes(), (std::vector<int64_t>{48, 64, 4}));
+  // The colours do not depend on the alpha.
+  EXPECT_TRUE(torch::equal(out.slice(2, 0, 3), model.upscale(rgba.slice(2, 0, 3).contiguous())));
+  // The alpha is the luma of the network's output for the alpha as a grey image.
+  const torch::Tensor grey = model.upscale(rgba.slice(2, 3, 4).expand({12, 16, 3}).contiguous()).to(torch::kFloat);
+  const torch::Tensor luma = 0.299 * grey.select(2, 0) + 0.587 * grey.select(2, 1) + 0.114 * grey.select(2, 2);
+  EXPECT_LE((out.select(2, 3).to(torch::kFloat) - luma).abs().max().item<double>(), 1.0);
+}
+
+}  // namespace
+}  // namespace u3d::nn
