@@ -9,6 +9,7 @@
 #include "core/memory.h"
 #include "core/parallel.h"
 #include "core/progress.h"
+#include "nn/runtime.h"
 #include "unique3d/version.h"
 
 namespace u3d::cli {
@@ -47,6 +48,7 @@ int main(int argc, char** argv) {
   ProgressScope progress_scope(&progress_lines);
   keep_freed_memory_for_reuse();
   configure_threads(threads);
+  nn::configure_torch_threads(threads);
   try {
     for (auto& [sub, action] : actions)
       if (sub->parsed()) action();

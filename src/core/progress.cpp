@@ -1,6 +1,8 @@
 #include "core/progress.h"
 
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdio>
 #include <exception>
 
@@ -20,11 +22,33 @@ void emit(ProgressEvent event) { listener().on_event(event); }
 
 }  // namespace
 
+namespace {
+
+// "41 s", "6 min 9 s", "2 h 5 min".
+std::string duration_text(double seconds) {
+  const long s = std::lround(std::max(seconds, 0.0));
+  char buf[48];
+  if (s < 60)
+    std::snprintf(buf, sizeof buf, "%ld s", s);
+  else if (s < 3600)
+    std::snprintf(buf, sizeof buf, "%ld min %ld s", s / 60, s % 60);
+  else
+    std::snprintf(buf, sizeof buf, "%ld h %ld min", s / 3600, (s % 3600) / 60);
+  return buf;
+}
+
+}  // namespace
+
 void StderrProgress::on_event(const ProgressEvent& event) {
   if (quiet_) return;
+  const Clock::time_point now = Clock::now();
   std::string line;
   switch (event.kind) {
-    case ProgressEvent::Kind::StageBegin: line = event.text + " ..."; break;
+    case ProgressEvent::Kind::StageBegin:
+      stage_begin_ = last_line_ = now;
+      loop_.clear();
+      line = event.text + " ...";
+      break;
     case ProgressEvent::Kind::StageEnd: {
       char buf[64];
       std::snprintf(buf, sizeof buf, " done in %.2f s", event.seconds);
@@ -32,10 +56,26 @@ void StderrProgress::on_event(const ProgressEvent& event) {
       break;
     }
     case ProgressEvent::Kind::Message: line = event.text; break;
-    case ProgressEvent::Kind::Step: return;
+    case ProgressEvent::Kind::Step: {
+      if (event.text != loop_ || event.step <= last_step_) {  // a new loop
+        loop_ = event.text;
+        loop_printed_ = false;
+      }
+      last_step_ = event.step;
+      const bool last = event.step >= event.steps;
+      if (!(std::chrono::duration<double>(now - last_line_).count() >= interval_ || (last && loop_printed_))) return;
+      loop_printed_ = true;
+      const double elapsed = std::chrono::duration<double>(now - stage_begin_).count();
+      line = event.text + " " + std::to_string(event.step) + "/" + std::to_string(event.steps) + ", " +
+             duration_text(elapsed);
+      if (!last && event.step > 0)
+        line += ", about " + duration_text(elapsed / event.step * (event.steps - event.step)) + " left";
+      break;
+    }
   }
-  std::fprintf(stderr, "[unique3d] %s\n", line.c_str());
-  std::fflush(stderr);
+  last_line_ = now;
+  std::fprintf(out_, "[unique3d] %s\n", line.c_str());
+  std::fflush(out_);
 }
 
 ProgressScope::ProgressScope(ProgressListener* l) : previous_(t_listener) { t_listener = l; }

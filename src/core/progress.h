@@ -6,6 +6,7 @@
 // a listener that prints lines on stderr; a web page or a Python binding installs its own. Without one,
 // the lines go to stderr unless set_progress_quiet(true) (tests and benches).
 #include <chrono>
+#include <cstdio>
 #include <string>
 
 #include "core/error.h"
@@ -30,14 +31,26 @@ class ProgressListener {
 };
 
 // "[unique3d] name ..." when a stage starts, "[unique3d] name done in X s" when it ends, messages as
-// they are; steps are not printed. Nothing when quiet.
+// they are. A loop's steps are printed only when the loop is slow: at most one line every
+// `step_interval_seconds`, "[unique3d] denoise 3/30, 41 s, about 6 min 9 s left" (the time since the
+// stage around the loop began, and the rest extrapolated from it), and its last step if any was
+// printed. Nothing when quiet. Lines go to `out` (stderr by default).
 class StderrProgress : public ProgressListener {
  public:
-  explicit StderrProgress(bool quiet = false) : quiet_(quiet) {}
+  explicit StderrProgress(bool quiet = false, double step_interval_seconds = 10.0, std::FILE* out = stderr)
+      : quiet_(quiet), interval_(step_interval_seconds), out_(out) {}
   void on_event(const ProgressEvent& event) override;
 
  private:
+  using Clock = std::chrono::steady_clock;
   bool quiet_;
+  double interval_;
+  std::FILE* out_;
+  Clock::time_point stage_begin_ = Clock::now();  // the last StageBegin: where a loop's time starts
+  Clock::time_point last_line_ = Clock::now();
+  std::string loop_;       // the loop whose steps are being counted
+  int last_step_ = 0;
+  bool loop_printed_ = false;
 };
 
 // Makes `listener` the calling thread's listener while in scope; the previous one comes back after.

@@ -8,6 +8,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/progress.h"
 
 namespace u3d {
 namespace {
@@ -92,7 +93,14 @@ std::string view_file_name(View v, bool normal) {
 }
 
 ViewSet make_view_set(std::array<Image, 4> rgb, std::array<Image, 4> normal_maps, NormalSpace space,
-                      const std::array<std::string, 4>& rgb_names, const std::array<std::string, 4>& normal_names) {
+                      const std::array<std::string, 4>& rgb_names, const std::array<std::string, 4>& normal_names,
+                      NormalCheck check) {
+  const auto require_content = [check](bool cond, const std::string& message) {
+    if (check == NormalCheck::kGiven)
+      require(cond, message);
+    else if (!cond)
+      progress("warning: " + message);
+  };
   // Sizes first: every later check assumes consistent, square images.
   for (size_t i = 0; i < 4; ++i) {
     check_square_and_size(rgb[i], rgb_names[i]);
@@ -153,12 +161,12 @@ ViewSet make_view_set(std::array<Image, 4> rgb, std::array<Image, 4> normal_maps
     require(fg < mask.size(), normal_names[i] +
                                   ": the mask covers the whole image (no background); the object must fit inside "
                                   "the view with a transparent background");
-    require(bad * 2 <= fg, normal_names[i] + ": " + std::to_string(100 * bad / fg) +
-                               "% of the foreground pixels are not unit normals encoded as (n+1)/2");
-    require(facing / double(fg) >= kMinMeanFacing,
-            normal_names[i] + ": the normals face away from the " + view_name(v) +
-                " camera (mean cosine " + std::to_string(facing / double(fg)) +
-                "); are they in the other space (see --normal-space)?");
+    require_content(bad * 2 <= fg, normal_names[i] + ": " + std::to_string(100 * bad / fg) +
+                                       "% of the foreground pixels are not unit normals encoded as (n+1)/2");
+    require_content(facing / double(fg) >= kMinMeanFacing,
+                    normal_names[i] + ": the normals face away from the " + view_name(v) + " camera (mean cosine " +
+                        std::to_string(facing / double(fg)) +
+                        (check == NormalCheck::kGiven ? "); are they in the other space (see --normal-space)?" : ")"));
     set.views[i].normals = std::move(normals);
 
     Image color = to_rgba(rgb[i]);
@@ -174,7 +182,7 @@ ViewSet make_view_set(std::array<Image, 4> rgb, std::array<Image, 4> normal_maps
   return set;
 }
 
-ViewSet load_view_set(const std::filesystem::path& dir, NormalSpace space) {
+ViewSet load_view_set(const std::filesystem::path& dir, NormalSpace space, NormalCheck check) {
   require(path_exists(dir) && std::filesystem::is_directory(dir),
           "views folder " + dir.string() + " does not exist or is not a folder");
   std::string missing;
@@ -195,7 +203,7 @@ ViewSet load_view_set(const std::filesystem::path& dir, NormalSpace space) {
       (normal ? normal_maps : rgb)[i] = load_image(path);
     }
   }
-  return make_view_set(std::move(rgb), std::move(normal_maps), space, rgb_names, normal_names);
+  return make_view_set(std::move(rgb), std::move(normal_maps), space, rgb_names, normal_names, check);
 }
 
 }  // namespace u3d

@@ -43,16 +43,24 @@ struct ViewSet {
 // File name of a view's image inside VIEWS_DIR, e.g. "front_rgb.png".
 std::string view_file_name(View v, bool normal);
 
+// How strictly the content of normal maps is checked. kGiven: maps someone made (files, renders);
+// most foreground pixels must decode to unit vectors and face their camera, else the maps are in the
+// other space or encoding, an Error. kPredicted: maps a network drew, where failing those tests means
+// a poor prediction, not a mistake: a warning through progress(), and the maps are used as they are.
+enum class NormalCheck { kGiven, kPredicted };
+
 // Loads and validates VIEWS_DIR. Every problem (missing or non-PNG file, non-square or mismatched
 // sizes, empty or full mask, all-black or non-normal normal map, NaN, normals facing away from their
 // camera) is an Error naming the file, found before any work starts.
-ViewSet load_view_set(const std::filesystem::path& dir, NormalSpace space = NormalSpace::World);
+ViewSet load_view_set(const std::filesystem::path& dir, NormalSpace space = NormalSpace::World,
+                      NormalCheck check = NormalCheck::kGiven);
 
 // Builds a ViewSet from images already in memory (as loaded from the files: RGB(A) in [0, 1], normal
 // maps encoded as (n + 1) / 2), applying the same mask rules and checks as load_view_set. `names`
 // label the images in error messages.
 ViewSet make_view_set(std::array<Image, 4> rgb, std::array<Image, 4> normal_maps, NormalSpace space,
-                      const std::array<std::string, 4>& rgb_names, const std::array<std::string, 4>& normal_names);
+                      const std::array<std::string, 4>& rgb_names, const std::array<std::string, 4>& normal_names,
+                      NormalCheck check = NormalCheck::kGiven);
 
 // Foreground test shared by every stage.
 inline bool is_foreground(float mask) { return mask >= 0.5f; }

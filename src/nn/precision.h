@@ -7,15 +7,10 @@
 // dtype, so schedulers and everything outside the networks stay fp32.
 #include <torch/torch.h>
 
-#include <string>
+#include "nn/precision_kind.h"
 
 namespace u3d::nn {
 
-enum class Precision { kFp32, kBf16, kFp16 };
-
-// "fp32" | "bf16" | "fp16"; anything else is an Error naming `what` and the choices.
-Precision parse_precision(const std::string& text, const std::string& what);
-const char* precision_name(Precision precision);
 torch::ScalarType scalar_type(Precision precision);
 
 // Whether this CPU has native bf16 dot products (avx512_bf16) that oneDNN uses for bf16 convolutions

@@ -30,21 +30,33 @@ double ReconstructSummary::total_seconds() const {
   return total;
 }
 
-ReconstructSummary reconstruct_folder(const ReconstructRequest& request, ProgressListener* listener) {
-  std::optional<ProgressScope> scope;
-  if (listener) scope.emplace(listener);
-  const std::filesystem::path& out = request.output;
+void check_mesh_output(const std::filesystem::path& out) {
   const std::string ext = lower_extension(out);
   require(ext == ".glb" || ext == ".obj" || ext == ".ply",
           "output " + out.string() + ": unsupported extension (use .glb, .obj or .ply)");
   const std::filesystem::path out_dir = out.parent_path().empty() ? "." : out.parent_path();
   require(std::filesystem::is_directory(out_dir), "output folder " + out_dir.string() + " does not exist");
+}
 
-  ReconstructSummary summary;
+ReconstructSummary reconstruct_folder(const ReconstructRequest& request, ProgressListener* listener) {
+  std::optional<ProgressScope> scope;
+  if (listener) scope.emplace(listener);
+  check_mesh_output(request.output);
   StageTimer load_timer("loading views");
   const ViewSet views = load_view_set(request.views_dir, request.normal_space);
-  summary.timings.push_back({"load", load_timer.finish()});
+  const double load_seconds = load_timer.finish();
+  ReconstructSummary summary = reconstruct_view_set(views, request);
+  summary.timings.insert(summary.timings.begin(), {"load", load_seconds});
+  return summary;
+}
 
+ReconstructSummary reconstruct_view_set(const ViewSet& views, const ReconstructRequest& request,
+                                        ProgressListener* listener) {
+  std::optional<ProgressScope> scope;
+  if (listener) scope.emplace(listener);
+  const std::filesystem::path& out = request.output;
+  check_mesh_output(out);
+  ReconstructSummary summary;
   ReconstructResult result = reconstruct(views, request.options);
   summary.timings.insert(summary.timings.end(), result.timings.begin(), result.timings.end());
   summary.mesh = std::move(result.mesh);

@@ -9,6 +9,7 @@
 #include "core/camera.h"
 #include "core/mesh.h"
 #include "core/progress.h"
+#include "core/view_set.h"
 #include "geometry/mesh_topology.h"
 #include "isomer/reconstruct.h"
 
@@ -40,5 +41,13 @@ struct ReconstructSummary {
 // and writes the outputs only after everything else succeeded (each atomically). Progress and
 // cancellation go through `listener` (none: the thread's current one).
 ReconstructSummary reconstruct_folder(const ReconstructRequest& request, ProgressListener* listener = nullptr);
+
+// The same from a view set already loaded (request.views_dir is not read).
+ReconstructSummary reconstruct_view_set(const ViewSet& views, const ReconstructRequest& request,
+                                        ProgressListener* listener = nullptr);
+
+// An Error when `output` cannot be a mesh file: an extension other than .glb, .obj, .ply, or a folder
+// that does not exist.
+void check_mesh_output(const std::filesystem::path& output);
 
 }  // namespace u3d

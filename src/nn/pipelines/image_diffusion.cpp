@@ -27,6 +27,12 @@ torch::Tensor vae_preprocess(const torch::Tensor& rgb, int64_t width, int64_t he
   return (resized.to(torch::kFloat) / 255.0f * 2.0f - 1.0f).permute({2, 0, 1}).unsqueeze(0);
 }
 
+std::vector<std::filesystem::path> conditioning_model_files(const DiffusersFolder& folder) {
+  return {folder.component_config("image_encoder"), folder.component_weights("image_encoder"),
+          folder.component_config("vae"),           folder.component_weights("vae"),
+          folder.preprocessor_config(),             folder.scheduler_config()};
+}
+
 ConditioningModels load_conditioning_models(const DiffusersFolder& folder, Precision precision) {
   check_precision_supported(precision, torch::kCPU);
   const auto clip_config = folder.component_config("image_encoder");

@@ -52,6 +52,8 @@ struct ConditioningModels {
 // Checks that `precision` runs on the CPU and that every file is in `folder` before reading any weights
 // (an Error names the problem or the first missing file), then loads and converts to `precision`.
 ConditioningModels load_conditioning_models(const DiffusersFolder& folder, Precision precision);
+// The files load_conditioning_models reads, checked to exist; reads nothing.
+std::vector<std::filesystem::path> conditioning_model_files(const DiffusersFolder& folder);
 
 struct ImageDiffusionModels {
   ClipVisionModelWithProjection& image_encoder;

@@ -14,6 +14,13 @@ constexpr int64_t kViews = 4;
 
 }  // namespace
 
+std::vector<std::filesystem::path> MultiViewModel::files(const std::filesystem::path& root) {
+  const DiffusersFolder folder(root);
+  std::vector<std::filesystem::path> files = {folder.component_config("unet"), folder.file("unet_state_dict.pth")};
+  for (auto& f : conditioning_model_files(folder)) files.push_back(std::move(f));
+  return files;
+}
+
 std::unique_ptr<MultiViewModel> MultiViewModel::load(const std::filesystem::path& root, Precision precision) {
   const DiffusersFolder folder(root);
   // The UNet's files are checked before load_conditioning_models reads any weights.

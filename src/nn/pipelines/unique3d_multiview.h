@@ -10,6 +10,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <vector>
 
 #include "nn/checkpoint/tensor_map.h"
 #include "nn/models/unet.h"
@@ -30,6 +31,8 @@ class MultiViewModel {
   // Checks that every file the stage needs is there (an Error names the first missing one and where the
   // folder comes from) before reading any weights, then loads and converts to `precision`.
   static std::unique_ptr<MultiViewModel> load(const std::filesystem::path& folder, Precision precision);
+  // The files load() reads, checked to exist (an Error names the first missing one); reads nothing.
+  static std::vector<std::filesystem::path> files(const std::filesystem::path& folder);
 
   // condition: uint8 RGB [H, W, 3], the object on white as the official app passes it. Returns float
   // [4, size, size, 3] in [0, 1], the model's four views in its own order (class labels 0..3). The initial

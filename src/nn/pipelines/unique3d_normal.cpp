@@ -7,6 +7,16 @@
 
 namespace u3d::nn {
 
+std::vector<std::filesystem::path> NormalModel::files(const std::filesystem::path& image_variations,
+                                                     const std::filesystem::path& image2normal) {
+  const DiffusersFolder base(image_variations);
+  const DiffusersFolder unique3d(image2normal);
+  std::vector<std::filesystem::path> files = {base.component_config("unet"), base.component_weights("unet"),
+                                              unique3d.file("unet_state_dict.pth")};
+  for (auto& f : conditioning_model_files(base)) files.push_back(std::move(f));
+  return files;
+}
+
 std::unique_ptr<NormalModel> NormalModel::load(const std::filesystem::path& image_variations,
                                                const std::filesystem::path& image2normal, Precision precision) {
   const DiffusersFolder base(image_variations);

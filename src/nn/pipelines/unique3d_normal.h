@@ -33,6 +33,9 @@ class NormalModel {
   // ckpt/image2normal folder. Every file is checked before any weights are read.
   static std::unique_ptr<NormalModel> load(const std::filesystem::path& image_variations,
                                            const std::filesystem::path& image2normal, Precision precision);
+  // The files load() reads, checked to exist (an Error names the first missing one); reads nothing.
+  static std::vector<std::filesystem::path> files(const std::filesystem::path& image_variations,
+                                                  const std::filesystem::path& image2normal);
 
   // views: uint8 RGB [H, W, 3] each (the official app passes the views on white). Returns float
   // [views, size, size, 3] in [0, 1]: each view's normal map in camera space as the model draws it.

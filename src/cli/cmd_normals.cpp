@@ -1,0 +1,42 @@
+// `unique3d normals VIEWS_DIR -o DIR --models M`: normal maps for four views, written as a view set that
+// `unique3d reconstruct` takes (pipeline/normal_stage.h).
+#include "cli/command.h"
+#include "cli/network_options.h"
+#include "pipeline/normal_stage.h"
+
+namespace u3d::cli {
+namespace {
+
+struct NormalArgs {
+  NormalRequest request;
+  std::filesystem::path front;
+  NetworkArgs network;
+};
+
+const CommandRegistration registration{
+    "normals", "Predict a normal map per view and write the view set ISOMER reconstructs from", [](CLI::App& sub) {
+      auto args = std::make_shared<NormalArgs>();
+      NormalRequest& r = args->request;
+      sub.add_option("views_dir", r.views_dir, "Folder with {front,right,back,left}_rgb.png (as `multiview` writes)")
+          ->required();
+      sub.add_option("-o,--output", r.output_dir,
+                     "Output folder: the view set, {view}_rgb.png with masks and world-space {view}_normal.png")
+          ->required();
+      sub.add_option("--front", args->front,
+                     "Use this image (the object on a transparent background) as the front view instead of "
+                     "front_rgb.png, as `generate` does with the input photo");
+      add_network_options(sub, args->network);
+      sub.add_option("--steps", r.options.steps, "Denoising steps")->capture_default_str()->check(CLI::Range(1, 1000));
+      sub.add_option("--guidance", r.options.guidance_scale, "Classifier-free guidance scale")
+          ->capture_default_str()
+          ->check(number_in(0.0, 100.0));
+      return [args] {
+        NormalRequest request = args->request;
+        if (!args->front.empty()) request.front = args->front;
+        request.network = args->network.resolved();
+        print_stage_summary(predict_view_normals(request));
+      };
+    }};
+
+}  // namespace
+}  // namespace u3d::cli

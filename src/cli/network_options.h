@@ -1,0 +1,23 @@
+#pragma once
+// The options every network subcommand shares (--models, --dtype, --seed) and the summary line it prints.
+#include <CLI/CLI.hpp>
+#include <memory>
+#include <string>
+
+#include "pipeline/network_stage.h"
+
+namespace u3d::cli {
+
+struct NetworkArgs {
+  NetworkOptions options;
+  std::string dtype = "auto";
+  // The options with --dtype resolved ("auto" leaves the device's default).
+  NetworkOptions resolved() const;
+};
+
+void add_network_options(CLI::App& sub, NetworkArgs& args);
+
+// "time: load 1.2 s, multi-view 30.1 s, ..., total ...; bf16; peak memory 2100 MiB" and the files written.
+void print_stage_summary(const NetworkStageSummary& summary);
+
+}  // namespace u3d::cli

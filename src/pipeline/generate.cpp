@@ -1,0 +1,276 @@
+#include "pipeline/generate.h"
+
+#include <algorithm>
+#include <optional>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/view_set.h"
+#include "nn/pipelines/unique3d_multiview.h"
+#include "nn/pipelines/unique3d_normal.h"
+#include "nn/preprocess/pil_resize.h"
+#include "pipeline/model_folder.h"
+
+namespace u3d {
+namespace {
+
+namespace fs = std::filesystem;
+
+enum Stage { kPrepare, kMultiView, kRefine, kUpscale, kNormals, kReconstruct, kStageCount };
+
+// Limits on the photo: smaller has too little of the object to draw four views from; larger is
+// certainly not an object photo the networks can use (they see it at most at 2048 px).
+constexpr int kMinPhotoSide = 64;
+constexpr int kMaxPhotoSide = 8192;
+constexpr int kRefinedSize = 512;  // the views after refinement (or its replacement, a Lanczos resize)
+
+// Where a stage's outputs live inside the intermediates folder.
+fs::path stage_folder(Stage stage) {
+  switch (stage) {
+    case kMultiView: return "multiview";
+    case kRefine: return "refined";
+    case kUpscale: return "upscaled";
+    case kNormals: return "views";
+    default: return {};
+  }
+}
+
+std::vector<fs::path> stage_files(Stage stage) {
+  if (stage == kPrepare) return {"front.png"};
+  std::vector<fs::path> files;
+  for (View v : kAllViews) {
+    files.push_back(stage_folder(stage) / view_file_name(v, false));
+    if (stage == kNormals) files.push_back(stage_folder(stage) / view_file_name(v, true));
+  }
+  return files;
+}
+
+bool stage_complete(const fs::path& dir, Stage stage) {
+  const std::vector<fs::path> files = stage_files(stage);
+  return std::all_of(files.begin(), files.end(), [&](const fs::path& f) { return fs::is_regular_file(dir / f); });
+}
+
+Image to_rgba(const Image& image) {
+  if (image.channels == 4) return image;
+  Image out(image.width, image.height, 4, 1.f);
+  for (size_t i = 0; i < image.pixel_count(); ++i) {
+    const float* p = image.data.data() + i * image.channels;
+    const bool gray = image.channels < 3;
+    for (int c = 0; c < 3; ++c) out.data[4 * i + c] = p[gray ? 0 : c];
+    if (image.channels == 2) out.data[4 * i + 3] = p[1];
+  }
+  return out;
+}
+
+// The photo, checked: an Error for what no stage can use, RGBA for the rest (grey replicated; no alpha
+// is alpha 1, i.e. no background removed yet).
+Image load_photo(const fs::path& path) {
+  const Image photo = load_image(path);
+  const std::string name = "photo " + path.string();
+  require(std::min(photo.width, photo.height) >= kMinPhotoSide,
+          name + " is " + std::to_string(photo.width) + "x" + std::to_string(photo.height) +
+              ": too small to reconstruct from (at least " + std::to_string(kMinPhotoSide) + " px per side)");
+  require(std::max(photo.width, photo.height) <= kMaxPhotoSide,
+          name + " is " + std::to_string(photo.width) + "x" + std::to_string(photo.height) + ": larger than " +
+              std::to_string(kMaxPhotoSide) + " px per side; scale it down first");
+  return to_rgba(photo);
+}
+
+// The object's mask covers nothing / everything.
+bool fully_transparent(const Image& rgba) {
+  for (size_t i = 0; i < rgba.pixel_count(); ++i)
+    if (rgba.data[4 * i + 3] > 0.f) return false;
+  return true;
+}
+bool opaque(const Image& rgba) {
+  for (size_t i = 0; i < rgba.pixel_count(); ++i)
+    if (rgba.data[4 * i + 3] < 1.f) return false;
+  return true;
+}
+
+// change_rgba_bg(image, "white") of the official app: the colour composited over white, alpha kept.
+Image on_white_keeping_alpha(const Image& rgba) {
+  const Image rgb = composite_over_white(rgba);
+  Image out = rgba;
+  for (size_t i = 0; i < out.pixel_count(); ++i)
+    for (int c = 0; c < 3; ++c) out.data[4 * i + c] = rgb.data[3 * i + c];
+  return out;
+}
+
+Image lanczos_resize(const Image& rgb, int size) {
+  const torch::Tensor resized = nn::pil_resize(nn::image_to_uint8_rgb(rgb), size, size, nn::PilFilter::Lanczos);
+  const torch::Tensor f = resized.to(torch::kFloat).div(255).contiguous();
+  Image out(size, size, 3);
+  std::memcpy(out.data.data(), f.data_ptr<float>(), out.data.size() * sizeof(float));
+  return out;
+}
+
+std::array<std::string, 4> view_names(bool normal) {
+  std::array<std::string, 4> names;
+  for (View v : kAllViews) names[size_t(v)] = view_file_name(v, normal);
+  return names;
+}
+
+// One run of the stages: what they hand each other, and the report.
+struct Run {
+  explicit Run(const GenerateRequest& r) : request(r) {}
+
+  const GenerateRequest& request;
+  GenerateSummary summary;
+  Image front;                 // prepare's output, the front view of the view set
+  std::array<Image, 4> views;  // multiview's, refine's, upscale's outputs in turn
+  std::optional<ViewSet> view_set;
+
+  // Writes a stage's images into the intermediates folder when one is kept.
+  void keep(const std::vector<std::pair<fs::path, const Image*>>& images) {
+    if (request.keep_intermediates.empty()) return;
+    for (const auto& [relative, image] : images) {
+      const fs::path path = request.keep_intermediates / relative;
+      ensure_directory(path.parent_path());
+      save_image(*image, path);
+      summary.written.push_back(path);
+    }
+  }
+  void keep_views(Stage stage) {
+    std::vector<std::pair<fs::path, const Image*>> images;
+    for (View v : kAllViews) images.push_back({stage_folder(stage) / view_file_name(v, false), &views[size_t(v)]});
+    keep(images);
+  }
+  void report(Stage stage, double seconds, bool resumed) {
+    summary.stages.push_back({generate_stage_names()[stage], seconds, peak_memory_mib(), resumed});
+  }
+
+  // Reads what `stage` handed on from the intermediates folder.
+  void resume(Stage stage) {
+    const fs::path& dir = request.from_intermediates;
+    if (stage == kPrepare) front = to_rgba(load_image(dir / "front.png"));
+    if (stage == kMultiView || stage == kRefine || stage == kUpscale)
+      for (View v : kAllViews) views[size_t(v)] = load_image(dir / stage_folder(stage) / view_file_name(v, false));
+    if (stage == kNormals)
+      view_set = load_view_set(dir / stage_folder(kNormals), NormalSpace::World, NormalCheck::kPredicted);
+  }
+
+  void run(Stage stage, const std::optional<Image>& photo) {
+    switch (stage) {
+      case kPrepare: {
+        StageTimer timer("prepare");
+        front = on_white_keeping_alpha(*photo);
+        keep({{"front.png", &front}});
+        report(stage, timer.finish(), false);
+        break;
+      }
+      case kMultiView: {
+        NetworkStageSummary s;
+        views = run_multiview_stage(front, request.network, request.multiview, s);
+        keep_views(stage);
+        report(stage, s.total_seconds(), false);
+        break;
+      }
+      case kRefine: {
+        StageTimer timer("resizing the views to 512 px");
+        for (Image& view : views) view = lanczos_resize(view, kRefinedSize);
+        keep_views(stage);
+        report(stage, timer.finish(), false);
+        break;
+      }
+      case kUpscale:
+        break;
+      case kNormals: {
+        // The front view is the prepared photo, as in the official geo_reconstruct.
+        NetworkStageSummary s;
+        std::array<Image, 4> inputs = views;
+        inputs[size_t(View::Front)] = front;
+        const ViewSetImages set = run_normal_stage(inputs, request.network, request.normals, s);
+        std::vector<std::pair<fs::path, const Image*>> images;
+        for (View v : kAllViews) {
+          images.push_back({stage_folder(stage) / view_file_name(v, false), &set.rgb[size_t(v)]});
+          images.push_back({stage_folder(stage) / view_file_name(v, true), &set.normals[size_t(v)]});
+        }
+        keep(images);
+        report(stage, s.total_seconds(), false);
+        view_set = make_view_set(set.rgb, set.normals, NormalSpace::World, view_names(false), view_names(true),
+                                 NormalCheck::kPredicted);
+        break;
+      }
+      case kReconstruct: {
+        ReconstructRequest r;
+        r.output = request.output;
+        r.options = request.reconstruct;
+        r.official_output_scale = request.official_output_scale;
+        summary.reconstruction = reconstruct_view_set(*view_set, r);
+        report(stage, summary.reconstruction.total_seconds(), false);
+        summary.written.insert(summary.written.end(), summary.reconstruction.written.begin(),
+                               summary.reconstruction.written.end());
+        break;
+      }
+      case kStageCount:
+        break;
+    }
+  }
+};
+
+}  // namespace
+
+double GenerateSummary::total_seconds() const {
+  double total = 0.0;
+  for (const GenerateStageReport& s : stages) total += s.seconds;
+  return total;
+}
+
+const std::vector<std::string>& generate_stage_names() {
+  static const std::vector<std::string> names = {"prepare", "multiview", "refine", "upscale", "normals", "reconstruct"};
+  return names;
+}
+
+GenerateSummary generate(const GenerateRequest& request, ProgressListener* listener) {
+  std::optional<ProgressScope> scope;
+  if (listener) scope.emplace(listener);
+  check_mesh_output(request.output);
+  require(request.multiview.steps >= 1 && request.normals.steps >= 1, "denoising steps must be at least 1");
+  require(request.refine == false, "refinement (ControlNet-tile) is not available yet: use --no-refine");
+
+  // Where to start: after the last stage whose outputs are all in from_intermediates.
+  Stage start = kPrepare;
+  if (!request.from_intermediates.empty()) {
+    require(fs::is_directory(request.from_intermediates),
+            "intermediates folder " + request.from_intermediates.string() + " does not exist");
+    for (int s = kNormals; s >= kPrepare; --s)
+      if (stage_complete(request.from_intermediates, Stage(s))) {
+        start = Stage(s + 1);
+        break;
+      }
+    require(start != kPrepare && stage_complete(request.from_intermediates, kPrepare),
+            "intermediates folder " + request.from_intermediates.string() +
+                " holds no run to resume: it needs front.png and the outputs of a later stage (multiview/, refined/, "
+                "upscaled/ or views/)");
+  }
+  if (!request.keep_intermediates.empty()) ensure_directory(request.keep_intermediates);
+
+  // Everything the stages to run need is checked before the first of them starts.
+  std::optional<Image> photo;
+  if (start == kPrepare) {
+    photo = load_photo(request.image);
+    require(!fully_transparent(*photo), "photo " + request.image.string() + " is fully transparent: nothing to reconstruct");
+    require(!opaque(*photo), "photo " + request.image.string() +
+                                 " has no transparent background; background removal is not available yet: give the "
+                                 "object on a transparent background (RGBA PNG)");
+  }
+  const ModelFolder models(request.network.models);
+  if (start <= kMultiView) nn::MultiViewModel::files(models.img2mvimg());
+  if (start <= kNormals) nn::NormalModel::files(models.image_variations_for_normals(), models.image2normal());
+
+  Run run(request);
+  run.summary.precision = resolve_precision(request.network);
+  for (int s = kPrepare; s < kStageCount; ++s) {
+    if (s >= start) {
+      run.run(Stage(s), photo);
+    } else {
+      // The front image is needed to the end; the views only from the stage before the first to run.
+      if (s == kPrepare || s == start - 1) run.resume(Stage(s));
+      run.report(Stage(s), 0.0, true);
+    }
+  }
+  return run.summary;
+}
+
+}  // namespace u3d

@@ -1,0 +1,71 @@
+#include "pipeline/multiview_stage.h"
+
+#include <optional>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "nn/pipelines/unique3d_multiview.h"
+#include "nn/preprocess/pil_resize.h"
+#include "pipeline/model_folder.h"
+
+namespace u3d {
+namespace {
+
+Image tensor_to_rgb(const torch::Tensor& hwc) {
+  const torch::Tensor t = hwc.to(torch::kFloat).clamp(0, 1).contiguous();
+  Image image(int(t.size(1)), int(t.size(0)), 3);
+  std::memcpy(image.data.data(), t.data_ptr<float>(), image.data.size() * sizeof(float));
+  return image;
+}
+
+}  // namespace
+
+std::array<Image, 4> run_multiview_stage(const Image& front, const NetworkOptions& network,
+                                         const MultiViewOptions& options, NetworkStageSummary& summary) {
+  const ModelFolder folder(network.models);
+  summary.precision = resolve_precision(network);
+  StageTimer load_timer("loading the multi-view model");
+  auto model = nn::MultiViewModel::load(folder.img2mvimg(), summary.precision);
+  summary.timings.push_back({"load multi-view model", load_timer.finish()});
+
+  StageTimer timer("multi-view generation");
+  nn::MultiViewSettings settings;
+  settings.size = options.size;
+  settings.steps = options.steps;
+  settings.guidance_scale = options.guidance_scale;
+  nn::SeededNoise noise(network.seed);
+  const torch::Tensor views = model->run(nn::image_to_uint8_rgb(composite_over_white(front)), settings, noise);
+  model.reset();
+  summary.timings.push_back({"multi-view", timer.finish()});
+  summary.peak_memory_mib = peak_memory_mib();
+  std::array<Image, 4> out;
+  for (View v : kAllViews) out[size_t(v)] = tensor_to_rgb(views[int(v)]);
+  return out;
+}
+
+NetworkStageSummary generate_views(const MultiViewRequest& request, ProgressListener* listener) {
+  std::optional<ProgressScope> scope;
+  if (listener) scope.emplace(listener);
+  require(request.options.steps >= 1, "multi-view steps must be at least 1");
+  require(request.options.size >= 8 && request.options.size % 8 == 0, "multi-view size must be a multiple of 8");
+  const Image front = load_image(request.image);
+  require(front.channels == 4,
+          "image " + request.image.string() +
+              " has no alpha channel: give the object on a transparent background (RGBA PNG)");
+  bool transparent = false;
+  for (size_t i = 0; i < front.pixel_count() && !transparent; ++i) transparent = front.data[4 * i + 3] < 1.f;
+  require(transparent, "image " + request.image.string() +
+                           " is opaque everywhere: give the object on a transparent background (RGBA PNG)");
+
+  NetworkStageSummary summary;
+  const std::array<Image, 4> views = run_multiview_stage(front, request.network, request.options, summary);
+  StageTimer write_timer("writing views");
+  write_folder_atomically(request.output_dir, [&](const std::filesystem::path& folder) {
+    for (View v : kAllViews) save_image(views[size_t(v)], folder / view_file_name(v, /*normal=*/false));
+  });
+  for (View v : kAllViews) summary.written.push_back(request.output_dir / view_file_name(v, false));
+  summary.timings.push_back({"write", write_timer.finish()});
+  return summary;
+}
+
+}  // namespace u3d

@@ -1,0 +1,100 @@
+// `generate` end to end on the tiny golden models at a small size: a mesh file and every stage's
+// intermediates; resuming from each stage's intermediates; the photo checks.
+#include "pipeline/generate.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "core/synthetic_views.h"
+#include "io/mesh_io.h"
+#include "pipeline/tiny_model_folder.h"
+
+namespace u3d {
+namespace {
+
+namespace fs = std::filesystem;
+
+class Generate : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    set_progress_quiet(true);
+    dir = new fs::path(testing::fresh_temp_dir("generate"));
+    testing::write_tiny_model_folder(*dir / "models");
+    testing::write_disk_photo(*dir / "photo.png");
+  }
+  static void TearDownTestSuite() {
+    fs::remove_all(*dir);
+    delete dir;
+  }
+  static GenerateRequest request(const std::string& output) {
+    GenerateRequest r;
+    r.image = *dir / "photo.png";
+    r.output = *dir / output;
+    r.network.models = *dir / "models";
+    r.network.precision = nn::Precision::kFp32;
+    r.refine = false;
+    r.multiview.size = 32;
+    r.multiview.steps = 2;
+    r.normals.size = 32;
+    r.normals.steps = 2;
+    r.reconstruct.coarse.steps = 5;
+    r.reconstruct.refine.steps = 5;
+    return r;
+  }
+  static fs::path* dir;
+};
+fs::path* Generate::dir = nullptr;
+
+TEST_F(Generate, WritesTheMeshAndEveryStagesIntermediatesAndResumesFromThem) {
+  GenerateRequest r = request("mesh.glb");
+  r.keep_intermediates = *dir / "kept";
+  const GenerateSummary s = generate(r);
+  ASSERT_TRUE(fs::exists(*dir / "mesh.glb"));
+  EXPECT_GT(read_mesh(*dir / "mesh.glb").face_count(), 0u);
+  ASSERT_EQ(s.stages.size(), generate_stage_names().size());
+  for (const auto& stage : s.stages) EXPECT_FALSE(stage.resumed) << stage.name;
+  EXPECT_TRUE(fs::exists(*dir / "kept" / "front.png"));
+  for (const char* folder : {"multiview", "refined", "views"})
+    EXPECT_TRUE(fs::exists(*dir / "kept" / folder / "left_rgb.png")) << folder;
+  EXPECT_TRUE(fs::exists(*dir / "kept" / "views" / "left_normal.png"));
+
+  // Resume after each stage: remove the later stages' outputs, and only the stages after run.
+  const std::vector<std::string> later = {"views", "upscaled", "refined", "multiview"};
+  for (size_t removed = 0; removed < later.size(); ++removed) {
+    fs::remove_all(*dir / "kept" / later[removed]);
+    GenerateRequest resume = request("resumed.glb");
+    resume.from_intermediates = *dir / "kept";
+    const GenerateSummary rs = generate(resume);
+    EXPECT_TRUE(fs::exists(*dir / "resumed.glb"));
+    size_t resumed = 0;
+    for (const auto& stage : rs.stages) resumed += stage.resumed;
+    EXPECT_GE(resumed, 1u);
+    fs::remove(*dir / "resumed.glb");
+  }
+}
+
+TEST_F(Generate, PhotosNoStageCanUseAreNamed) {
+  const auto expect_error = [&](const fs::path& photo, const std::string& needle) {
+    GenerateRequest r = request("never.glb");
+    r.image = photo;
+    try {
+      generate(r);
+      ADD_FAILURE() << "no error for " << photo;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(*dir / "never.glb"));
+  };
+  std::ofstream(*dir / "text.png") << "not an image";
+  expect_error(*dir / "text.png", "text.png");
+  save_image(Image(40, 80, 4, 1.f), *dir / "tiny.png");
+  expect_error(*dir / "tiny.png", "too small");
+  save_image(Image(9000, 64, 4, 1.f), *dir / "huge.png");
+  expect_error(*dir / "huge.png", "larger than");
+  save_image(Image(96, 96, 4, 0.f), *dir / "transparent.png");
+  expect_error(*dir / "transparent.png", "fully transparent");
+}
+
+}  // namespace
+}  // namespace u3d

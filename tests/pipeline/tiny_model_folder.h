@@ -1,0 +1,33 @@
+#pragma once
+// A --models folder in the official layout (pipeline/model_folder.h) made of the tiny golden models of
+// tests/data/nn, and a small object photo, for tests of the network stages and commands.
+#include <filesystem>
+
+#include "core/image.h"
+#include "nn/golden.h"
+
+namespace u3d::testing {
+
+inline void write_tiny_model_folder(const std::filesystem::path& models) {
+  using nn::test::copy_into_folder;
+  using nn::test::golden_dir;
+  using nn::test::write_image_variations_folder;
+  write_image_variations_folder(models / "img2mvimg", /*unet_weights=*/false);
+  copy_into_folder(models, {{golden_dir("unet_mv") / "weights.pth", "img2mvimg/unet_state_dict.pth"}});
+  write_image_variations_folder(models / "sd-image-variations-diffusers", /*unet_weights=*/true);
+  copy_into_folder(models, {{golden_dir("unet_ref") / "weights.pth", "image2normal/unet_state_dict.pth"}});
+}
+
+// A 96 px object photo: a disk with a vertical colour ramp on a transparent background.
+inline void write_disk_photo(const std::filesystem::path& path) {
+  Image photo(96, 96, 4, 0.f);
+  for (int y = 0; y < 96; ++y)
+    for (int x = 0; x < 96; ++x)
+      if ((x - 48) * (x - 48) + (y - 50) * (y - 50) < 30 * 30) {
+        float* p = photo.pixel(x, y);
+        p[0] = 0.8f, p[1] = 0.2f + 0.004f * y, p[2] = 0.1f, p[3] = 1.f;
+      }
+  save_image(photo, path);
+}
+
+}  // namespace u3d::testing
