@@ -121,8 +121,16 @@ TEST_F(RefineFolders, RunsTheImg2ImgTailEndToEnd) {
   EXPECT_TRUE(torch::equal(out[3], trace.at("images").narrow(0, 16, 16).narrow(1, 16, 16)));
 }
 
+TEST_F(RefineFolders, ListsTheFilesItReads) {
+  const auto files = RefineModel::files(paths);
+  EXPECT_EQ(files.size(), 14u);
+  for (const auto& f : files) EXPECT_TRUE(fs::is_regular_file(f)) << f;
+  EXPECT_EQ(files.back(), paths.ip_adapter / "models" / "ip-adapter_sd15.safetensors");
+}
+
 TEST_F(RefineFolders, MissingFilesAreNamed) {
   fs::remove(paths.ip_adapter / "models" / "ip-adapter_sd15.safetensors");
+  EXPECT_THROW(RefineModel::files(paths), u3d::Error);
   try {
     RefineModel::load(paths, Precision::kFp32);
     FAIL() << "no error";

@@ -30,30 +30,51 @@ torch::Tensor make_grid(const std::vector<torch::Tensor>& views) {
   return torch::cat({torch::cat({views[0], views[1]}, 1), torch::cat({views[2], views[3]}, 1)}, 0);
 }
 
+// Every file the stage reads, each checked to exist (an Error names the first missing one).
+struct RefineFiles {
+  explicit RefineFiles(const RefineCheckpoints& c) {
+    const DiffusersFolder base(c.base, "the Stable Diffusion 1.5 base model is runwayml/stable-diffusion-v1-5 "
+                                       "(diffusers layout) on Hugging Face");
+    const DiffusersFolder ckpt(c.ckpt, "the tile ControlNet is ckpt/controlnet-tile of the Unique3D checkpoints "
+                                       "(Hugging Face wukailu/Unique3D)");
+    const DiffusersFolder ip(c.ip_adapter, "the IP-Adapter is the Hugging Face repository h94/IP-Adapter");
+    unet_config = base.component_config("unet");
+    unet_weights = base.component_weights("unet");
+    vae_config = base.component_config("vae");
+    vae_weights = base.component_weights("vae");
+    text_config = base.component_config("text_encoder");
+    text_weights = base.component_weights("text_encoder");
+    merges = base.file("tokenizer/merges.txt");
+    processor_config = base.preprocessor_config();
+    scheduler_config = base.scheduler_config();
+    controlnet_config = ckpt.component_config("controlnet-tile");
+    controlnet_weights = ckpt.component_weights("controlnet-tile");
+    image_encoder_config = ip.component_config("models/image_encoder");
+    image_encoder_weights = ip.component_weights("models/image_encoder");
+    adapter_weights = ip.file("models/ip-adapter_sd15.safetensors");
+  }
+  std::vector<std::filesystem::path> all() const {
+    return {unet_config,       unet_weights,       vae_config,           vae_weights,           text_config,
+            text_weights,      merges,             processor_config,     scheduler_config,      controlnet_config,
+            controlnet_weights, image_encoder_config, image_encoder_weights, adapter_weights};
+  }
+  std::filesystem::path unet_config, unet_weights, vae_config, vae_weights, text_config, text_weights, merges,
+      processor_config, scheduler_config, controlnet_config, controlnet_weights, image_encoder_config,
+      image_encoder_weights, adapter_weights;
+};
+
 }  // namespace
+
+std::vector<std::filesystem::path> RefineModel::files(const RefineCheckpoints& checkpoints) {
+  return RefineFiles(checkpoints).all();
+}
 
 std::unique_ptr<RefineModel> RefineModel::load(const RefineCheckpoints& c, Precision precision) {
   check_precision_supported(precision, torch::kCPU);
-  const DiffusersFolder base(c.base, "the Stable Diffusion 1.5 base model is runwayml/stable-diffusion-v1-5 "
-                                     "(diffusers layout) on Hugging Face");
-  const DiffusersFolder ckpt(c.ckpt, "the tile ControlNet is ckpt/controlnet-tile of the Unique3D checkpoints "
-                                     "(Hugging Face wukailu/Unique3D)");
-  const DiffusersFolder ip(c.ip_adapter, "the IP-Adapter is the Hugging Face repository h94/IP-Adapter");
-  // Every file is checked before any weights are read.
-  const auto unet_config = base.component_config("unet");
-  const auto unet_weights = base.component_weights("unet");
-  const auto vae_config = base.component_config("vae");
-  const auto vae_weights = base.component_weights("vae");
-  const auto text_config = base.component_config("text_encoder");
-  const auto text_weights = base.component_weights("text_encoder");
-  const auto merges = base.file("tokenizer/merges.txt");
-  const auto processor_config = base.preprocessor_config();
-  const auto scheduler_config = base.scheduler_config();
-  const auto controlnet_config = ckpt.component_config("controlnet-tile");
-  const auto controlnet_weights = ckpt.component_weights("controlnet-tile");
-  const auto image_encoder_config = ip.component_config("models/image_encoder");
-  const auto image_encoder_weights = ip.component_weights("models/image_encoder");
-  const auto adapter_weights = ip.file("models/ip-adapter_sd15.safetensors");
+  const RefineFiles f(c);  // every file is checked before any weights are read
+  const auto& [unet_config, unet_weights, vae_config, vae_weights, text_config, text_weights, merges, processor_config,
+               scheduler_config, controlnet_config, controlnet_weights, image_encoder_config, image_encoder_weights,
+               adapter_weights] = f;
 
   auto m = std::make_unique<RefineModel>();
   const torch::TensorOptions cpu;

@@ -67,6 +67,8 @@ class RefineModel {
   // Checks that every file is there (an Error names the first missing one and where it comes from)
   // before reading any weights, then loads and converts to `precision`.
   static std::unique_ptr<RefineModel> load(const RefineCheckpoints& checkpoints, Precision precision);
+  // The files load() reads, checked to exist (an Error names the first missing one); reads nothing.
+  static std::vector<std::filesystem::path> files(const RefineCheckpoints& checkpoints);
 
   // views: the four views, uint8 RGB [H, W, 3] of one size, in the multi-view model's order (pasted as
   // the grid [0 1; 2 3]); front: uint8 RGB [H', W', 3], the front image on white (the official app passes
