@@ -3,9 +3,13 @@
 //  - multi-view (img2mvimg): 4 views at 256 px with guidance, so the UNet sees batch 8 at 32x32 latents
 //    with joint attention over the 4 views, class labels and the concatenated condition latents;
 //  - normal (image2normal), per view: 512 px with guidance, a reference pass over the condition latents
-//    and the main UNet, each batch 2 at 64x64 (the official pipeline batches the 4 views: 4x this).
-// Prints seconds per step (median of --repetitions, default 3) and peak RSS. A full run is 30 steps each.
-// Usage: bench_unique3d_steps [--dtype=fp32|bf16] [--repetitions=N]
+//    and the main UNet, each batch 2 at 64x64 (the official pipeline batches the 4 views: 4x this);
+//  - refine (SD 1.5 + tile ControlNet + IP-Adapter): the 1024 px grid with guidance, the ControlNet and
+//    the UNet each batch 2 at 128x128 latents (16,384 tokens in the first level's self-attention), the
+//    UNet's context 77 text + 4 image tokens.
+// Prints seconds per step (median of --repetitions, default 3) and peak RSS (of the whole process: run
+// one step kind with --only to see its own). A full run is 30 steps each for the first two, 10 for refine.
+// Usage: bench_unique3d_steps [--dtype=fp32|bf16] [--repetitions=N] [--only=multiview|normal|refine]
 #include <sys/resource.h>
 #include <torch/torch.h>
 
@@ -20,6 +24,8 @@
 #include "nn/checkpoint/config_json.h"
 #include "nn/layers/layers.h"
 #include "nn/layers/multiview_attention.h"
+#include "nn/models/controlnet.h"
+#include "nn/models/ip_adapter.h"
 #include "nn/models/unet.h"
 #include "nn/models/unet_reference.h"
 #include "nn/precision.h"
@@ -56,22 +62,27 @@ double peak_rss_gb() {
 int main(int argc, char** argv) try {
   Precision precision = Precision::kFp32;
   int repetitions = 3;
+  std::string only;
+  const std::string usage = "usage: bench_unique3d_steps [--dtype=fp32|bf16] [--repetitions=N] [--only=multiview|normal|refine]";
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg.starts_with("--dtype="))
       precision = parse_precision(arg.substr(8), "--dtype");
     else if (arg.starts_with("--repetitions="))
       repetitions = std::max(1, std::stoi(arg.substr(14)));
+    else if (arg == "--only=multiview" || arg == "--only=normal" || arg == "--only=refine")
+      only = arg.substr(7);
     else
-      throw u3d::Error("unknown argument '" + arg + "' (usage: bench_unique3d_steps [--dtype=fp32|bf16] [--repetitions=N])");
+      throw u3d::Error("unknown argument '" + arg + "' (" + usage + ")");
   }
+  auto wanted = [&](const std::string& name) { return only.empty() || only == name; };
   configure_torch_threads();
   at::globalContext().setFlushDenormal(true);  // random weights: keep the FPU off its denormal path
   c10::InferenceMode inference;
   const auto options = torch::TensorOptions().dtype(scalar_type(precision));
   torch::manual_seed(0);
 
-  {
+  if (wanted("multiview")) {
     UNet2DConditionModel unet(manifest_config("unet_unique3d_img2mvimg"), options);
     randomize_parameters(*unet, 0.02);
     set_precision(*unet, precision);
@@ -84,7 +95,7 @@ int main(int argc, char** argv) try {
     std::printf("multi-view step (batch 8 at 32x32, 4 joint views)  %s: %6.2f s   peak RSS %.2f GB\n",
                 precision_name(precision), s, peak_rss_gb());
   }
-  {
+  if (wanted("normal")) {
     ReferenceUNet model(manifest_config("unet_unique3d_image2normal"), options);
     randomize_parameters(*model.unet, 0.02);  // the reference UNet is registered inside it
     set_precision(*model.unet, precision);
@@ -92,6 +103,31 @@ int main(int argc, char** argv) try {
     torch::Tensor condition = torch::randn({2, 4, 64, 64});
     const double s = median_seconds(repetitions, [&] { model.forward(x, torch::tensor(500.0f), context, condition); });
     std::printf("normal step per view (reference + main, batch 2 at 64x64) %s: %6.2f s   peak RSS %.2f GB\n",
+                precision_name(precision), s, peak_rss_gb());
+  }
+  if (wanted("refine")) {
+    // SD 1.5's UNet has the sd-image-variations architecture (cross-attention dim 768).
+    UNet2DConditionModel unet(manifest_config("unet_sd_image_variations_plain"), options);
+    IpAdapter adapter(*unet, 1024, 4, 1.0, options);
+    auto controlnet_manifest = read_json_file(std::string(UNIQUE3D_SOURCE_DIR) + "/tests/data/nn/manifests/controlnet_sd15.json");
+    ControlNetModel controlnet(ControlNetConfig::from_json(controlnet_manifest.at("constructor_config"), "controlnet_sd15"),
+                               options);
+    for (torch::nn::Module* m : {static_cast<torch::nn::Module*>(unet.get()), static_cast<torch::nn::Module*>(adapter.get()),
+                                 static_cast<torch::nn::Module*>(controlnet.get())}) {
+      randomize_parameters(*m, 0.02);
+      set_precision(*m, precision);
+    }
+    torch::Tensor x = torch::randn({2, 4, 128, 128}), text = torch::randn({2, 77, 768});
+    torch::Tensor context = adapter->context(text, torch::randn({2, 1024}));
+    torch::Tensor control = torch::rand({2, 3, 1024, 1024});
+    const double s = median_seconds(repetitions, [&] {
+      ControlNetOutput residuals = controlnet->forward(x, torch::tensor(500.0f), text, control);
+      UNetExtras extras;
+      extras.down_block_additional_residuals = residuals.down_block_res_samples;
+      extras.mid_block_additional_residual = residuals.mid_block_res_sample;
+      unet->forward(x, torch::tensor(500.0f), context, extras);
+    });
+    std::printf("refine step (ControlNet + UNet with IP-Adapter, batch 2 at 128x128) %s: %6.2f s   peak RSS %.2f GB\n",
                 precision_name(precision), s, peak_rss_gb());
   }
   return 0;

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "nn/layers/multiview_attention.h"
+#include "nn/layers/transformer_2d.h"
 
 namespace u3d::nn {
 namespace {
@@ -29,6 +30,17 @@ TEST(Attention, ChunkedQueriesMatchDirectComputation) {
     auto out = multi_head_attention(q, k, v, 3, scale, budget);
     EXPECT_LT((out - expected).abs().max().item<double>(), 1e-12) << "budget " << budget;
   }
+}
+
+// Sequences over 4,096 tokens go through the feed-forward in blocks; the result is the one-block formula.
+TEST(Attention, FeedForwardInTokenBlocksMatchesWholeSequence) {
+  torch::NoGradGuard no_grad;
+  torch::manual_seed(5);
+  FeedForward ff(8, torch::TensorOptions());
+  randomize_parameters(*ff, 0.5);
+  const torch::Tensor x = torch::randn({2, 2 * 4096 + 100, 8});
+  const torch::Tensor whole = ff->proj_out->forward(ff->geglu->forward(x));
+  EXPECT_LE((ff->forward(x) - whole).abs().max().item<double>(), 1e-6);
 }
 
 TEST(Attention, MultiViewJoinsConsecutiveBatchEntries) {

@@ -33,6 +33,22 @@ TEST(ClipVision, RejectsWrongInputSize) {
   EXPECT_THROW(model->forward(torch::zeros({1, 3, 224, 224})), u3d::Error);
 }
 
+// OpenCLIP's ViT-H/14 (the IP-Adapter image encoder) says "hidden_act": "gelu": the exact erf GELU.
+TEST(ClipVision, GeluConfigUsesTheExactGelu) {
+  torch::NoGradGuard no_grad;
+  auto json = golden_config("clip_vision");
+  json["hidden_act"] = "gelu";
+  auto config = ClipVisionConfig::from_json(json, "vit-h");
+  EXPECT_EQ(config.hidden_act, ClipActivation::kGelu);
+  ClipVisionModelWithProjection model(config, torch::TensorOptions());
+  load_golden_weights(*model, "clip_vision", clip_policy());
+  auto& mlp = model->layers[0]->mlp;
+  const torch::Tensor x = torch::randn({2, 5, config.hidden_size});
+  EXPECT_TRUE(torch::allclose(mlp->forward(x), mlp->fc2->forward(torch::gelu(mlp->fc1->forward(x)))));
+  json["hidden_act"] = "relu";
+  EXPECT_THROW(ClipVisionConfig::from_json(json, "vit-h"), u3d::Error);
+}
+
 TEST(ClipImageProcessor, BicubicCropIsBitExactWithPillow) {
   auto config = ClipImageProcessorConfig::from_json(golden_config("clip_vision", "preprocessor_config.json"),
                                                     "preprocessor_config.json");

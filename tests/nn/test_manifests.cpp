@@ -8,7 +8,10 @@
 
 #include "golden.h"
 #include "nn/layers/multiview_attention.h"
+#include "nn/models/clip_text.h"
 #include "nn/models/clip_vision.h"
+#include "nn/models/controlnet.h"
+#include "nn/models/ip_adapter.h"
 #include "nn/models/unet.h"
 #include "nn/models/unet_reference.h"
 #include "nn/models/vae.h"
@@ -103,6 +106,45 @@ TEST(Manifests, ClipVisionVitL14WithProjection) {
   TensorMap old_checkpoint{{"vision_model.embeddings.position_ids", torch::empty({1, 257}, kMeta.dtype(torch::kLong))}};
   drop_clip_vision_position_ids(old_checkpoint);
   EXPECT_TRUE(old_checkpoint.empty());
+}
+
+// SD 1.5's text_encoder (CLIP ViT-L/14 text tower).
+TEST(Manifests, ClipTextVitL14Sd15) {
+  auto m = manifest("clip_text_vit_l14_sd15");
+  ClipTextModel clip(ClipTextConfig::from_json(m.at("constructor_config"), "manifest"), kMeta);
+  EXPECT_EQ(clip->config.eos_token_id, 2);
+  Shapes shapes = module_shapes(*clip);
+  EXPECT_EQ(shapes.size(), m.at("num_tensors").get<size_t>());
+  expect_same_shapes(shapes, manifest_shapes(m));
+}
+
+TEST(Manifests, ControlNetSd15) {
+  auto m = manifest("controlnet_sd15");
+  ControlNetModel controlnet(ControlNetConfig::from_json(m.at("constructor_config"), "manifest"), kMeta);
+  Shapes shapes = module_shapes(*controlnet);
+  EXPECT_EQ(shapes.size(), m.at("num_tensors").get<size_t>());
+  expect_same_shapes(shapes, manifest_shapes(m));
+}
+
+// ip-adapter_sd15 on the SD 1.5 UNet (the sd-image-variations UNet has the same architecture): the
+// adapter has the original file's names and shapes, and the UNet the diffusers names after loading.
+TEST(Manifests, IpAdapterSd15) {
+  auto m = manifest("ip_adapter_sd15");
+  UNet2DConditionModel unet(
+      UNetConfig::from_json(manifest("unet_sd_image_variations_plain").at("constructor_config"), "manifest"), kMeta);
+  const auto& c = m.at("constructor_config");
+  IpAdapter adapter(*unet, c.at("image_embed_dim").get<int64_t>(), c.at("num_tokens").get<int64_t>(), 1.0, kMeta);
+  expect_same_shapes(module_shapes(*adapter), manifest_shapes(m));
+
+  Shapes unet_shapes = module_shapes(*unet);
+  int processor_keys = 0;
+  for (const auto& [key, shape] : m.at("diffusers_keys_after_load_ip_adapter").items()) {
+    if (key.starts_with("encoder_hid_proj.")) continue;  // the projection lives in IpAdapter
+    ASSERT_TRUE(unet_shapes.count(key)) << key;
+    EXPECT_EQ(unet_shapes[key], shape.get<std::vector<int64_t>>()) << key;
+    ++processor_keys;
+  }
+  EXPECT_EQ(processor_keys, 32);
 }
 
 }  // namespace

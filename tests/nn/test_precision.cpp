@@ -7,7 +7,10 @@
 #include "golden.h"
 #include "nn/layers/attention.h"
 #include "nn/layers/multiview_attention.h"
+#include "nn/models/clip_text.h"
 #include "nn/models/clip_vision.h"
+#include "nn/models/controlnet.h"
+#include "nn/models/ip_adapter.h"
 #include "nn/models/unet.h"
 #include "nn/models/vae.h"
 
@@ -158,6 +161,51 @@ TEST(PrecisionGolden, ClipVisionInBf16) {
   EXPECT_RELATIVE_TO_GOLDEN(out.last_hidden_state, ref["last_hidden_state"], kBf16Tolerance);
   for (size_t i = 0; i < out.hidden_states.size(); ++i)
     EXPECT_RELATIVE_TO_GOLDEN(out.hidden_states[i], ref["hidden_states." + std::to_string(i)], kBf16Tolerance);
+}
+
+TEST(PrecisionGolden, ClipTextInBf16) {
+  torch::NoGradGuard no_grad;
+  ClipTextModel model(ClipTextConfig::from_json(golden_config("clip_text"), "clip_text/config.json"),
+                      torch::TensorOptions());
+  load_golden_weights(*model, "clip_text", clip_policy());
+  set_precision(*model, Precision::kBf16);
+  auto in = golden_tensors("clip_text", "inputs");
+  auto ref = golden_tensors("clip_text", "outputs");
+  ClipTextOutput out = model->forward(in["input_ids"]);
+  EXPECT_EQ(out.last_hidden_state.scalar_type(), torch::kFloat);
+  EXPECT_RELATIVE_TO_GOLDEN(out.last_hidden_state, ref["last_hidden_state"], kBf16Tolerance);
+  EXPECT_RELATIVE_TO_GOLDEN(out.pooler_output, ref["pooler_output"], kBf16Tolerance);
+}
+
+TEST(PrecisionGolden, ControlNetAndIpAdapterInBf16) {
+  torch::NoGradGuard no_grad;
+  ControlNetModel controlnet(ControlNetConfig::from_json(golden_config("controlnet"), "controlnet/config.json"),
+                             torch::TensorOptions());
+  load_golden_weights(*controlnet, "controlnet");
+  set_precision(*controlnet, Precision::kBf16);
+  auto in = golden_tensors("controlnet", "inputs");
+  auto ref = golden_tensors("controlnet", "outputs");
+  ControlNetOutput out = controlnet->forward(in["sample"], in["timestep"], in["encoder_hidden_states"],
+                                             in["controlnet_cond"], in["conditioning_scale"].item<double>());
+  EXPECT_EQ(out.mid_block_res_sample.scalar_type(), torch::kFloat);
+  for (size_t i = 0; i < out.down_block_res_samples.size(); ++i)
+    EXPECT_RELATIVE_TO_GOLDEN(out.down_block_res_samples[i], ref["down_block_res_samples." + std::to_string(i)],
+                              kBf16Tolerance);
+  EXPECT_RELATIVE_TO_GOLDEN(out.mid_block_res_sample, ref["mid_block_res_sample"], kBf16Tolerance);
+
+  UNet2DConditionModel unet(UNetConfig::from_json(golden_config("unet_base"), "unet_base/config.json"),
+                            torch::TensorOptions());
+  load_golden_weights(*unet, "unet_base");
+  IpAdapter adapter = load_ip_adapter(*unet, golden_dir("ip_adapter") / "weights.safetensors",
+                                      golden_config("ip_adapter").at("ip_scale").get<double>());
+  set_precision(*unet, Precision::kBf16);
+  set_precision(*adapter, Precision::kBf16);
+  EXPECT_EQ(adapter->processors[0]->to_k_ip->weight.scalar_type(), torch::kBFloat16);
+  auto ip_in = golden_tensors("ip_adapter", "inputs");
+  const torch::Tensor context = adapter->context(ip_in["encoder_hidden_states"], ip_in["image_embeds"].squeeze(1));
+  EXPECT_EQ(context.scalar_type(), torch::kFloat);
+  EXPECT_RELATIVE_TO_GOLDEN(unet->forward(ip_in["sample"], ip_in["timestep"], context),
+                            golden_tensors("ip_adapter", "outputs")["sample_out"], kBf16Tolerance);
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 namespace u3d::nn {
@@ -60,6 +61,17 @@ torch::Tensor multi_head_attention(const torch::Tensor& q, const torch::Tensor& 
     }
   });
   return merge_heads(out, heads);
+}
+
+torch::Tensor causal_multi_head_attention(const torch::Tensor& q, const torch::Tensor& k, const torch::Tensor& v,
+                                          int64_t heads, double scale) {
+  TORCH_CHECK(q.dim() == 3 && q.sizes() == k.sizes() && k.sizes() == v.sizes(), "causal attention expects equal [B, L, C] inputs");
+  TORCH_CHECK(q.size(2) % heads == 0, "attention: ", q.size(2), " channels do not split into ", heads, " heads");
+  torch::Tensor scores = torch::bmm(split_heads(q * scale, heads), split_heads(k, heads).transpose(1, 2));
+  const int64_t l = q.size(1);
+  const torch::Tensor future = torch::ones({l, l}, torch::TensorOptions().dtype(torch::kBool).device(q.device())).triu(1);
+  scores = scores.masked_fill(future, -std::numeric_limits<double>::infinity());
+  return merge_heads(torch::bmm(softmax_fp32(scores), split_heads(v, heads)), heads);
 }
 
 torch::Tensor PlainAttentionProcessor::process(AttentionImpl& attention, const torch::Tensor& x,

@@ -39,6 +39,11 @@ torch::Tensor multi_head_attention(const torch::Tensor& q, const torch::Tensor& 
                                    int64_t heads, double scale,
                                    int64_t score_budget = kDefaultAttentionScoreBudget);
 
+// multi_head_attention with a causal mask (query i sees keys 0..i), as CLIP's text encoder; q, k and v
+// have the same length. Computed in one block: meant for short sequences (77 tokens).
+torch::Tensor causal_multi_head_attention(const torch::Tensor& q, const torch::Tensor& k, const torch::Tensor& v,
+                                          int64_t heads, double scale);
+
 struct AttentionOptions {
   int64_t query_dim = 0;
   int64_t cross_attention_dim = 0;  // 0: self-attention (keys come from query_dim features)

@@ -1,10 +1,7 @@
 #include "nn/models/clip_vision.h"
 
-#include <cmath>
-
 #include "core/error.h"
 #include "nn/checkpoint/config_json.h"
-#include "nn/layers/attention.h"
 
 namespace u3d::nn {
 
@@ -16,7 +13,6 @@ ClipVisionConfig ClipVisionConfig::from_json(const nlohmann::json& json, const s
     return c;
   }
   ConfigReader r(json, source);
-  r.require_value("hidden_act", "quick_gelu");
   ClipVisionConfig c;
   c.hidden_size = r.get_int("hidden_size", c.hidden_size);
   c.intermediate_size = r.get_int("intermediate_size", c.intermediate_size);
@@ -27,6 +23,7 @@ ClipVisionConfig ClipVisionConfig::from_json(const nlohmann::json& json, const s
   c.patch_size = r.get_int("patch_size", c.patch_size);
   c.projection_dim = r.get_int("projection_dim", c.projection_dim);
   c.layer_norm_eps = r.get_double("layer_norm_eps", c.layer_norm_eps);
+  c.hidden_act = parse_clip_activation(r.get_string("hidden_act", "quick_gelu"), source);
   if (c.hidden_size % c.num_attention_heads != 0)
     throw Error(source + ": hidden_size " + std::to_string(c.hidden_size) + " is not divisible by num_attention_heads " +
                 std::to_string(c.num_attention_heads));
@@ -55,41 +52,6 @@ torch::Tensor ClipVisionEmbeddingsImpl::forward(const torch::Tensor& pixel_value
   return torch::cat({cls, patches}, 1) + position_embedding->weight.unsqueeze(0);
 }
 
-ClipAttentionImpl::ClipAttentionImpl(int64_t dim, int64_t heads_, const torch::TensorOptions& t) : heads(heads_) {
-  k_proj = register_module("k_proj", Linear(dim, dim, true, t));
-  v_proj = register_module("v_proj", Linear(dim, dim, true, t));
-  q_proj = register_module("q_proj", Linear(dim, dim, true, t));
-  out_proj = register_module("out_proj", Linear(dim, dim, true, t));
-}
-
-torch::Tensor ClipAttentionImpl::forward(const torch::Tensor& x) {
-  const double scale = 1.0 / std::sqrt(static_cast<double>(x.size(2) / heads));
-  return out_proj->forward(multi_head_attention(q_proj->forward(x), k_proj->forward(x), v_proj->forward(x), heads, scale));
-}
-
-ClipMlpImpl::ClipMlpImpl(int64_t dim, int64_t hidden, const torch::TensorOptions& t) {
-  fc1 = register_module("fc1", Linear(dim, hidden, true, t));
-  fc2 = register_module("fc2", Linear(hidden, dim, true, t));
-}
-
-torch::Tensor ClipMlpImpl::forward(const torch::Tensor& x) {
-  torch::Tensor h = fc1->forward(x);
-  h = h * torch::sigmoid(1.702 * h);  // quick_gelu
-  return fc2->forward(h);
-}
-
-ClipEncoderLayerImpl::ClipEncoderLayerImpl(const ClipVisionConfig& c, const torch::TensorOptions& t) {
-  self_attn = register_module("self_attn", ClipAttention(c.hidden_size, c.num_attention_heads, t));
-  layer_norm1 = register_module("layer_norm1", LayerNorm(c.hidden_size, c.layer_norm_eps, t));
-  mlp = register_module("mlp", ClipMlp(c.hidden_size, c.intermediate_size, t));
-  layer_norm2 = register_module("layer_norm2", LayerNorm(c.hidden_size, c.layer_norm_eps, t));
-}
-
-torch::Tensor ClipEncoderLayerImpl::forward(const torch::Tensor& x) {
-  torch::Tensor h = x + self_attn->forward(layer_norm1->forward(x));
-  return h + mlp->forward(layer_norm2->forward(h));
-}
-
 ClipVisionModelWithProjectionImpl::ClipVisionModelWithProjectionImpl(const ClipVisionConfig& c,
                                                                      const torch::TensorOptions& t)
     : config(c) {
@@ -97,12 +59,13 @@ ClipVisionModelWithProjectionImpl::ClipVisionModelWithProjectionImpl(const ClipV
   auto vision_model = register_module("vision_model", std::make_shared<torch::nn::Module>());
   embeddings = vision_model->register_module("embeddings", ClipVisionEmbeddings(c, t));
   pre_layrnorm = vision_model->register_module("pre_layrnorm", LayerNorm(c.hidden_size, c.layer_norm_eps, t));
-  auto encoder = vision_model->register_module("encoder", std::make_shared<torch::nn::Module>());
-  auto layer_list = encoder->register_module("layers", torch::nn::ModuleList());
-  for (int64_t i = 0; i < c.num_hidden_layers; ++i) {
-    layers.push_back(ClipEncoderLayer(c, t));
-    layer_list->push_back(layers.back());
-  }
+  ClipEncoderOptions encoder_options;
+  encoder_options.hidden_size = c.hidden_size;
+  encoder_options.intermediate_size = c.intermediate_size;
+  encoder_options.num_attention_heads = c.num_attention_heads;
+  encoder_options.layer_norm_eps = c.layer_norm_eps;
+  encoder_options.activation = c.hidden_act;
+  layers = register_clip_encoder(*vision_model, encoder_options, c.num_hidden_layers, t);
   post_layernorm = vision_model->register_module("post_layernorm", LayerNorm(c.hidden_size, c.layer_norm_eps, t));
   visual_projection = register_module("visual_projection", Linear(c.hidden_size, c.projection_dim, false, t));
 }

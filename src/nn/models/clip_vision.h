@@ -1,6 +1,6 @@
 #pragma once
 // transformers CLIPVisionModelWithProjection (ViT: patch + class embeddings, pre-LayerNorm encoder with
-// quick_gelu MLPs, post-LayerNorm on the class token, bias-free visual projection), built from its
+// quick_gelu or GELU MLPs (nn/layers/clip_encoder.h), post-LayerNorm on the class token, bias-free visual projection), built from its
 // config.json with transformers' parameter names (vision_model.*, visual_projection.weight).
 #include <nlohmann/json.hpp>
 #include <string>
@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "nn/checkpoint/tensor_map.h"
+#include "nn/layers/clip_encoder.h"
 #include "nn/layers/layers.h"
 
 namespace u3d::nn {
@@ -22,6 +23,7 @@ struct ClipVisionConfig {
   int64_t patch_size = 32;
   int64_t projection_dim = 512;
   double layer_norm_eps = 1e-5;
+  ClipActivation hidden_act = ClipActivation::kQuickGelu;
 
   // Accepts a vision config or a full CLIPConfig (uses its "vision_config").
   static ClipVisionConfig from_json(const nlohmann::json& json, const std::string& source);
@@ -40,33 +42,6 @@ class ClipVisionEmbeddingsImpl : public torch::nn::Module {
   Embedding position_embedding{nullptr};
 };
 TORCH_MODULE(ClipVisionEmbeddings);
-
-class ClipAttentionImpl : public torch::nn::Module {
- public:
-  ClipAttentionImpl(int64_t dim, int64_t heads, const torch::TensorOptions& options);
-  torch::Tensor forward(const torch::Tensor& x);
-  Linear k_proj{nullptr}, v_proj{nullptr}, q_proj{nullptr}, out_proj{nullptr};
-  int64_t heads;
-};
-TORCH_MODULE(ClipAttention);
-
-class ClipMlpImpl : public torch::nn::Module {
- public:
-  ClipMlpImpl(int64_t dim, int64_t hidden, const torch::TensorOptions& options);
-  torch::Tensor forward(const torch::Tensor& x);  // fc2(quick_gelu(fc1(x)))
-  Linear fc1{nullptr}, fc2{nullptr};
-};
-TORCH_MODULE(ClipMlp);
-
-class ClipEncoderLayerImpl : public torch::nn::Module {
- public:
-  ClipEncoderLayerImpl(const ClipVisionConfig& config, const torch::TensorOptions& options);
-  torch::Tensor forward(const torch::Tensor& x);
-  ClipAttention self_attn{nullptr};
-  LayerNorm layer_norm1{nullptr}, layer_norm2{nullptr};
-  ClipMlp mlp{nullptr};
-};
-TORCH_MODULE(ClipEncoderLayer);
 
 struct ClipVisionOutput {
   torch::Tensor image_embeds;       // [N, projection_dim]

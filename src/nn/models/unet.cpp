@@ -88,6 +88,14 @@ UNetConfig UNetConfig::from_json(const nlohmann::json& json, const std::string& 
   return c;
 }
 
+torch::Tensor batch_timesteps(const torch::Tensor& timestep, int64_t batch, const torch::Device& device) {
+  torch::Tensor steps = timestep.to(device);
+  if (steps.dim() == 0) steps = steps.unsqueeze(0);
+  if (steps.dim() != 1 || (steps.size(0) != batch && steps.size(0) != 1))
+    throw Error("UNet: " + std::to_string(steps.numel()) + " timesteps for a batch of " + std::to_string(batch));
+  return steps.expand({batch});
+}
+
 UNetDownBlockImpl::UNetDownBlockImpl(const UNetConfig& c, size_t index, int64_t in_channels, int64_t temb_channels,
                                      const torch::TensorOptions& t) {
   const int64_t out = c.block_out_channels[index];
@@ -257,13 +265,7 @@ torch::Tensor UNet2DConditionModelImpl::forward(const torch::Tensor& sample, con
   const torch::Tensor context = encoder_hidden_states.to(compute);
   record("conv_in_input", input);
 
-  torch::Tensor steps = timestep.to(sample.device());
-  if (steps.dim() == 0) steps = steps.unsqueeze(0);
-  if (steps.size(0) != batch) {
-    if (steps.size(0) != 1) throw Error("UNet: " + std::to_string(steps.size(0)) + " timesteps for a batch of " + std::to_string(batch));
-    steps = steps.expand({batch});
-  }
-  torch::Tensor t_emb = timestep_projection(steps, config.block_out_channels[0], config.flip_sin_to_cos, config.freq_shift)
+  torch::Tensor t_emb = timestep_projection(batch_timesteps(timestep, batch, sample.device()), config.block_out_channels[0], config.flip_sin_to_cos, config.freq_shift)
                             .to(compute);
   record("time_proj", t_emb);
   torch::Tensor emb = time_embedding->forward(t_emb);

@@ -52,6 +52,10 @@ struct UNetExtras {
   TensorMap* trace = nullptr;
 };
 
+// The UNet's timestep input for a batch: a 0-dim or [1] value is expanded to `batch`, [batch] is kept;
+// anything else is an Error.
+torch::Tensor batch_timesteps(const torch::Tensor& timestep, int64_t batch, const torch::Device& device);
+
 class UNetDownBlockImpl : public torch::nn::Module {
  public:
   UNetDownBlockImpl(const UNetConfig& config, size_t index, int64_t in_channels, int64_t temb_channels,

@@ -20,13 +20,12 @@ void check_rgb(const torch::Tensor& image) {
                 c10::toString(image.scalar_type()));
 }
 
-// VaeImageProcessor.preprocess: Pillow Lanczos resize, uint8 -> [-1, 1], NCHW.
+}  // namespace
+
 torch::Tensor vae_preprocess(const torch::Tensor& rgb, int64_t width, int64_t height) {
   torch::Tensor resized = pil_resize(rgb, width, height, PilFilter::Lanczos);
   return (resized.to(torch::kFloat) / 255.0f * 2.0f - 1.0f).permute({2, 0, 1}).unsqueeze(0);
 }
-
-}  // namespace
 
 std::vector<std::filesystem::path> conditioning_model_files(const DiffusersFolder& folder) {
   return {folder.component_config("image_encoder"), folder.component_weights("image_encoder"),

@@ -35,6 +35,10 @@ using Denoiser = std::function<torch::Tensor(const torch::Tensor& latent_input, 
                                              const torch::Tensor& image_embeddings,
                                              const torch::Tensor& condition_latents)>;
 
+// diffusers' VaeImageProcessor.preprocess of one uint8 RGB [H, W, 3] image: Pillow Lanczos resize to
+// width x height, [0, 255] -> [-1, 1], as float [1, 3, height, width].
+torch::Tensor vae_preprocess(const torch::Tensor& rgb, int64_t width, int64_t height);
+
 // The parts both Unique3D stages take from a diffusers folder of sd-image-variations: the CLIP image
 // encoder with its feature extractor, the VAE, and the scheduler config built as EulerAncestral (as the
 // official trainers' construct_pipeline does).

@@ -32,6 +32,12 @@ torch::Tensor SigmaScheduler::scale_model_input(const torch::Tensor& sample, int
   return sample / (sigma.pow(2) + 1).pow(0.5);
 }
 
+torch::Tensor SigmaScheduler::add_noise(const torch::Tensor& original, const torch::Tensor& noise,
+                                        int step_index) const {
+  check_step_index(step_index);
+  return original + noise * sigmas_[step_index].to(original.scalar_type());
+}
+
 torch::Tensor SigmaScheduler::predict_original(const torch::Tensor& model_output, const torch::Tensor& sample,
                                                const torch::Tensor& sigma) const {
   if (config_.prediction_type == "epsilon") return sample - sigma * model_output;

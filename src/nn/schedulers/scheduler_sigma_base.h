@@ -13,6 +13,8 @@ class SigmaScheduler : public Scheduler {
   torch::Tensor scale_model_input(const torch::Tensor& sample, int step_index) const override;
   // float32 [num_steps + 1], the last one 0.
   const torch::Tensor& sigmas() const { return sigmas_; }
+  // diffusers' add_noise for a run that starts at step `step_index` (img2img): original + noise * sigma.
+  torch::Tensor add_noise(const torch::Tensor& original, const torch::Tensor& noise, int step_index) const;
 
  protected:
   SigmaScheduler(const SchedulerConfig& config, const std::string& name);

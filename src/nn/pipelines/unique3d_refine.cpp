@@ -1,0 +1,194 @@
+#include "nn/pipelines/unique3d_refine.h"
+
+#include <algorithm>
+
+#include "core/error.h"
+#include "core/progress.h"
+#include "nn/checkpoint/config_json.h"
+#include "nn/checkpoint/diffusers_folder.h"
+#include "nn/checkpoint/state_dict_loader.h"
+#include "nn/pipelines/image_diffusion.h"
+#include "nn/preprocess/pil_resize.h"
+#include "nn/schedulers/scheduler_config.h"
+#include "nn/schedulers/scheduler_sigma_base.h"
+
+namespace u3d::nn {
+
+namespace {
+
+constexpr int64_t kViews = 4;
+
+void check_rgb(const torch::Tensor& image, const std::string& what) {
+  if (image.dim() != 3 || image.size(2) != 3 || image.scalar_type() != torch::kUInt8 || image.size(0) == 0 ||
+      image.size(1) == 0)
+    throw Error("refine: " + what + " must be uint8 RGB [H, W, 3], got " + c10::str(image.sizes()) + " " +
+                c10::toString(image.scalar_type()));
+}
+
+// app/utils.make_image_grid with rows=2: views 0 1 on top, 2 3 below.
+torch::Tensor make_grid(const std::vector<torch::Tensor>& views) {
+  return torch::cat({torch::cat({views[0], views[1]}, 1), torch::cat({views[2], views[3]}, 1)}, 0);
+}
+
+// Every file the stage reads, each checked to exist (an Error names the first missing one).
+struct RefineFiles {
+  explicit RefineFiles(const RefineCheckpoints& c) {
+    const DiffusersFolder base(c.base, "the Stable Diffusion 1.5 base model is runwayml/stable-diffusion-v1-5 "
+                                       "(diffusers layout) on Hugging Face");
+    const DiffusersFolder ckpt(c.ckpt, "the tile ControlNet is ckpt/controlnet-tile of the Unique3D checkpoints "
+                                       "(Hugging Face wukailu/Unique3D)");
+    const DiffusersFolder ip(c.ip_adapter, "the IP-Adapter is the Hugging Face repository h94/IP-Adapter");
+    unet_config = base.component_config("unet");
+    unet_weights = base.component_weights("unet");
+    vae_config = base.component_config("vae");
+    vae_weights = base.component_weights("vae");
+    text_config = base.component_config("text_encoder");
+    text_weights = base.component_weights("text_encoder");
+    merges = base.file("tokenizer/merges.txt");
+    processor_config = base.preprocessor_config();
+    scheduler_config = base.scheduler_config();
+    controlnet_config = ckpt.component_config("controlnet-tile");
+    controlnet_weights = ckpt.component_weights("controlnet-tile");
+    image_encoder_config = ip.component_config("models/image_encoder");
+    image_encoder_weights = ip.component_weights("models/image_encoder");
+    adapter_weights = ip.file("models/ip-adapter_sd15.safetensors");
+  }
+  std::vector<std::filesystem::path> all() const {
+    return {unet_config,       unet_weights,       vae_config,           vae_weights,           text_config,
+            text_weights,      merges,             processor_config,     scheduler_config,      controlnet_config,
+            controlnet_weights, image_encoder_config, image_encoder_weights, adapter_weights};
+  }
+  std::filesystem::path unet_config, unet_weights, vae_config, vae_weights, text_config, text_weights, merges,
+      processor_config, scheduler_config, controlnet_config, controlnet_weights, image_encoder_config,
+      image_encoder_weights, adapter_weights;
+};
+
+}  // namespace
+
+std::vector<std::filesystem::path> RefineModel::files(const RefineCheckpoints& checkpoints) {
+  return RefineFiles(checkpoints).all();
+}
+
+std::unique_ptr<RefineModel> RefineModel::load(const RefineCheckpoints& c, Precision precision) {
+  check_precision_supported(precision, torch::kCPU);
+  const RefineFiles f(c);  // every file is checked before any weights are read
+  const auto& [unet_config, unet_weights, vae_config, vae_weights, text_config, text_weights, merges, processor_config,
+               scheduler_config, controlnet_config, controlnet_weights, image_encoder_config, image_encoder_weights,
+               adapter_weights] = f;
+
+  auto m = std::make_unique<RefineModel>();
+  const torch::TensorOptions cpu;
+  m->tokenizer = std::make_unique<ClipTokenizer>(ClipTokenizer::load(merges));
+  m->feature_extractor = std::make_unique<ClipImageProcessor>(
+      ClipImageProcessorConfig::from_json(read_json_file(processor_config), processor_config.string()));
+  m->scheduler = make_scheduler(parse_scheduler_config(read_json_file(scheduler_config), scheduler_config.string()),
+                                SchedulerKind::EulerAncestral);
+  m->text_encoder = ClipTextModel(ClipTextConfig::from_json(read_json_file(text_config), text_config.string()), cpu);
+  load_state_dict(*m->text_encoder, load_weights_file(text_weights), clip_policy(), text_weights.string());
+  m->image_encoder = ClipVisionModelWithProjection(
+      ClipVisionConfig::from_json(read_json_file(image_encoder_config), image_encoder_config.string()), cpu);
+  load_state_dict(*m->image_encoder, load_weights_file(image_encoder_weights), clip_policy(),
+                  image_encoder_weights.string());
+  m->unet = UNet2DConditionModel(UNetConfig::from_json(read_json_file(unet_config), unet_config.string()), cpu);
+  load_state_dict(*m->unet, load_weights_file(unet_weights), {}, unet_weights.string());
+  m->ip_adapter = load_ip_adapter(*m->unet, adapter_weights, 1.0);
+  m->controlnet = ControlNetModel(
+      ControlNetConfig::from_json(read_json_file(controlnet_config), controlnet_config.string()), cpu);
+  load_state_dict(*m->controlnet, load_weights_file(controlnet_weights), {}, controlnet_weights.string());
+  m->vae = AutoencoderKL(AutoencoderKLConfig::from_json(read_json_file(vae_config), vae_config.string()), cpu);
+  load_state_dict(*m->vae, load_weights_file(vae_weights), {}, vae_weights.string());
+
+  for (torch::nn::Module* model : std::initializer_list<torch::nn::Module*>{
+           m->text_encoder.get(), m->image_encoder.get(), m->unet.get(), m->ip_adapter.get(), m->controlnet.get(),
+           m->vae.get()})
+    set_precision(*model, precision);
+  return m;
+}
+
+torch::Tensor RefineModel::run(const std::vector<torch::Tensor>& views, const torch::Tensor& front,
+                               const RefineSettings& s, NoiseSource& noise, TensorMap* trace) {
+  torch::NoGradGuard no_grad;
+  auto record = [trace](const std::string& name, const torch::Tensor& value) {
+    if (trace) (*trace)[name] = value;
+  };
+  if (views.size() != size_t(kViews)) throw Error("refine: needs 4 views, got " + std::to_string(views.size()));
+  for (const auto& v : views) {
+    check_rgb(v, "each view");
+    if (v.sizes() != views[0].sizes()) throw Error("refine: the four views must have one size");
+  }
+  check_rgb(front, "the front image");
+  const int64_t factor = vae->config.scale_factor() * 2;  // the grid splits into halves of whole latents
+  if (s.size <= 0 || s.size % factor != 0)
+    throw Error("refine: the size must be a positive multiple of " + std::to_string(factor) + ", got " +
+                std::to_string(s.size));
+  if (s.steps < 1 || !(s.strength > 0.0 && s.strength <= 1.0))
+    throw Error("refine: steps must be at least 1 and strength in (0, 1]");
+  const int run_steps = std::min(static_cast<int>(s.steps * s.strength), s.steps);
+  if (run_steps < 1)
+    throw Error("refine: steps x strength must be at least 1 (" + std::to_string(s.steps) + " x " +
+                std::to_string(s.strength) + ")");
+  const bool guidance = s.guidance_scale > 1.0;
+  ip_adapter->set_scale(s.ip_adapter_scale);
+
+  // Images: the grid, its bicubic resize as the control image (PIL's default filter, [0, 1]), and the
+  // VaeImageProcessor input (Lanczos, [-1, 1]).
+  const torch::Tensor grid = make_grid(views);
+  record("grid", grid);
+  torch::Tensor control = pil_resize(grid, s.size, s.size, PilFilter::Bicubic);
+  control = (control.to(torch::kFloat) / 255.0f).permute({2, 0, 1}).unsqueeze(0);
+  record("control_image", control);
+  const torch::Tensor init_image = vae_preprocess(grid, s.size, s.size);
+  record("init_image", init_image);
+
+  // Conditioning: text embeddings [negative, prompt] and the front image's CLIP embedding [zeros, embedding].
+  std::vector<std::string> prompts{s.prompt};
+  if (guidance) prompts.insert(prompts.begin(), s.negative_prompt);
+  const torch::Tensor prompt_embeds = text_encoder->forward(tokenizer->input_ids(prompts)).last_hidden_state;
+  record("prompt_embeds", prompt_embeds);
+  torch::Tensor image_embeds = image_encoder->forward(feature_extractor->pixel_values(front)).image_embeds;
+  if (guidance) image_embeds = torch::cat({torch::zeros_like(image_embeds), image_embeds});
+  record("image_embeds", image_embeds);
+  const torch::Tensor unet_context = ip_adapter->context(prompt_embeds, image_embeds);
+  if (guidance) control = torch::cat({control, control});
+
+  // img2img start (diffusers' get_timesteps): the schedule for all steps, entered at step `start`.
+  auto* sigma_scheduler = dynamic_cast<SigmaScheduler*>(scheduler.get());
+  TORCH_CHECK(sigma_scheduler, "refine: the scheduler must be an Euler sampler");
+  scheduler->set_timesteps(s.steps);
+  const int start = s.steps - run_steps;
+  record("timesteps", scheduler->timesteps().narrow(0, start, run_steps));
+  const LatentDistribution posterior = vae->encode(init_image);
+  const torch::Tensor init_latents =
+      (posterior.mean + posterior.std() * noise.randn(posterior.mean.sizes())) * vae->config.scaling_factor;
+  record("init_latents", init_latents);
+  torch::Tensor latents = sigma_scheduler->add_noise(init_latents, noise.randn(init_latents.sizes()), start);
+
+  for (int i = start; i < s.steps; ++i) {
+    record("latents." + std::to_string(i - start), latents);
+    const torch::Tensor input = scheduler->scale_model_input(guidance ? torch::cat({latents, latents}) : latents, i);
+    const torch::Tensor t = scheduler->timestep(i);
+    const ControlNetOutput residuals = controlnet->forward(input, t, prompt_embeds, control, s.conditioning_scale);
+    UNetExtras extras;
+    extras.down_block_additional_residuals = residuals.down_block_res_samples;
+    extras.mid_block_additional_residual = residuals.mid_block_res_sample;
+    torch::Tensor prediction = unet->forward(input, t, unet_context, extras);
+    if (guidance) {
+      auto halves = prediction.chunk(2);
+      prediction = halves[0] + s.guidance_scale * (halves[1] - halves[0]);
+    }
+    latents = scheduler->step(prediction, i, latents, noise).prev_sample;
+    progress_step("denoise", i - start + 1, run_steps);
+  }
+
+  torch::Tensor image = vae->decode(latents / vae->config.scaling_factor);
+  image = (image / 2 + 0.5).clamp(0, 1).permute({0, 2, 3, 1})[0];  // [size, size, 3]
+  record("images", image);
+  // app/utils.split_image with rows=2: the quarters in grid order.
+  const int64_t half = s.size / 2;
+  std::vector<torch::Tensor> quarters;
+  for (int64_t row = 0; row < 2; ++row)
+    for (int64_t col = 0; col < 2; ++col) quarters.push_back(image.narrow(0, row * half, half).narrow(1, col * half, half));
+  return torch::stack(quarters).contiguous();
+}
+
+}  // namespace u3d::nn

@@ -1,0 +1,93 @@
+#pragma once
+// Unique3D's refinement of the four views (the official refine_rgb in scripts/multiview_inference.py,
+// through refine_lr_with_sd in scripts/refine_lr_to_sr.py): the four views pasted into a 2x2 grid are
+// redrawn at 1024 px by diffusers' StableDiffusionControlNetImg2ImgPipeline on Stable Diffusion 1.5 with
+// the tile ControlNet (control image: the grid resized to 1024 px) and IP-Adapter conditioning on the
+// front image, then cut back into four views of 512 px.
+//
+// The official call, as it runs (diffusers 0.27):
+//  - prompt "4views, multiview"; the negative prompt is EMPTY: refine_lr_with_sd passes its NEG_PROMPT as
+//    `neg_prompt=`, which the pipeline swallows in **kwargs, so the unconditional half encodes "";
+//  - strength 0.2 of 50 EulerAncestral steps (scheduler built from the base model's scheduler config):
+//    the schedule for 50 steps, of which the last int(50 * 0.2) = 10 run (get_timesteps);
+//  - init latents: VAE encode of the grid (Lanczos-resized to 1024, [-1, 1]), a SAMPLE of the latent
+//    distribution (mean + std * noise) times 0.18215, then noised to the first step's sigma;
+//  - guidance 5.0 on both halves [negative, prompt]; the ControlNet (conditioning scale 1.0) sees the text
+//    embeddings only, the UNet the text embeddings followed by the 4 IP-Adapter tokens (scale 1.0) of
+//    the front image's CLIP ViT-H/14 embedding (the negative half: the tokens of a zero embedding);
+//  - VAE decode, (x / 2 + 0.5) clamped to [0, 1].
+// Noise is drawn in diffusers' order: the VAE sample, the img2img noise, then one draw per step.
+//
+// Checkpoints (RefineCheckpoints): the Stable Diffusion 1.5 base in the diffusers layout
+// (runwayml/stable-diffusion-v1-5: unet, vae, text_encoder, tokenizer/merges.txt, scheduler,
+// feature_extractor, whose CLIPImageProcessor prepares the IP-Adapter image); Unique3D's
+// ckpt/controlnet-tile (config.json + diffusion_pytorch_model.*); the h94/IP-Adapter repository
+// (models/ip-adapter_sd15.safetensors and the ViT-H/14 encoder models/image_encoder).
+#include <torch/torch.h>
+
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "nn/checkpoint/tensor_map.h"
+#include "nn/models/clip_text.h"
+#include "nn/models/clip_vision.h"
+#include "nn/models/controlnet.h"
+#include "nn/models/ip_adapter.h"
+#include "nn/models/unet.h"
+#include "nn/models/vae.h"
+#include "nn/precision.h"
+#include "nn/preprocess/clip_image_processor.h"
+#include "nn/preprocess/clip_tokenizer.h"
+#include "nn/schedulers/noise_source.h"
+#include "nn/schedulers/scheduler.h"
+
+namespace u3d::nn {
+
+struct RefineCheckpoints {
+  std::filesystem::path base;        // runwayml/stable-diffusion-v1-5, diffusers layout
+  std::filesystem::path ckpt;        // Unique3D's ckpt/ folder: uses ckpt/controlnet-tile
+  std::filesystem::path ip_adapter;  // h94/IP-Adapter: uses models/ip-adapter_sd15.safetensors, models/image_encoder
+};
+
+struct RefineSettings {
+  int64_t size = 1024;  // side of the grid the pass runs at; each view comes back at size / 2
+  int steps = 50;       // of which the last int(steps * strength) run
+  double strength = 0.2;
+  double guidance_scale = 5.0;
+  double conditioning_scale = 1.0;  // ControlNet
+  double ip_adapter_scale = 1.0;
+  std::string prompt = "4views, multiview";
+  std::string negative_prompt;  // empty, as the official call ends up (see above)
+};
+
+class RefineModel {
+ public:
+  // Checks that every file is there (an Error names the first missing one and where it comes from)
+  // before reading any weights, then loads and converts to `precision`.
+  static std::unique_ptr<RefineModel> load(const RefineCheckpoints& checkpoints, Precision precision);
+  // The files load() reads, checked to exist (an Error names the first missing one); reads nothing.
+  static std::vector<std::filesystem::path> files(const RefineCheckpoints& checkpoints);
+
+  // views: the four views, uint8 RGB [H, W, 3] of one size, in the multi-view model's order (pasted as
+  // the grid [0 1; 2 3]); front: uint8 RGB [H', W', 3], the front image on white (the official app passes
+  // the input image, upscaled, alpha composited on white). Returns float [4, size / 2, size / 2, 3] in
+  // [0, 1]. Reports progress_step("denoise", i, n) per step. `trace`, when given, receives grid,
+  // control_image, init_image, prompt_embeds, image_embeds, timesteps, init_latents, latents.<i> (before
+  // step i of the run) and images.
+  torch::Tensor run(const std::vector<torch::Tensor>& views, const torch::Tensor& front, const RefineSettings& settings,
+                    NoiseSource& noise, TensorMap* trace = nullptr);
+
+  std::unique_ptr<ClipTokenizer> tokenizer;
+  ClipTextModel text_encoder{nullptr};
+  std::unique_ptr<ClipImageProcessor> feature_extractor;
+  ClipVisionModelWithProjection image_encoder{nullptr};
+  UNet2DConditionModel unet{nullptr};
+  IpAdapter ip_adapter{nullptr};
+  ControlNetModel controlnet{nullptr};
+  AutoencoderKL vae{nullptr};
+  std::unique_ptr<Scheduler> scheduler;  // EulerAncestral
+};
+
+}  // namespace u3d::nn

@@ -1,0 +1,168 @@
+// The refinement stage loaded from folders in the official layouts (Stable Diffusion 1.5 base, Unique3D's
+// ckpt/controlnet-tile, h94/IP-Adapter), made of tiny models: the golden UNet, VAE, CLIP image encoder
+// and IP-Adapter, plus a seeded random text encoder (the tokenizer's full vocabulary, 16 wide to fit the
+// UNet) and ControlNet (one conditioning downsampling to fit the tiny VAE). It runs end to end.
+#include "nn/pipelines/unique3d_refine.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "golden.h"
+#include "nn/checkpoint/safetensors.h"
+
+namespace u3d::nn {
+namespace {
+
+using namespace u3d::nn::test;
+namespace fs = std::filesystem;
+
+TensorMap seeded_weights(torch::nn::Module& module) {
+  randomize_parameters(module, 0.2);
+  TensorMap out;
+  for (const auto& p : module.named_parameters(true)) out[p.key()] = p.value().detach().clone();
+  return out;
+}
+
+void write_json(const fs::path& path, const nlohmann::json& json) {
+  fs::create_directories(path.parent_path());
+  std::ofstream(path) << json.dump(2);
+}
+
+class CountingNoise : public NoiseSource {
+ public:
+  torch::Tensor randn(at::IntArrayRef shape, torch::ScalarType dtype) override {
+    ++draws;
+    return seeded.randn(shape, dtype);
+  }
+  SeededNoise seeded{233};
+  int draws = 0;
+};
+
+class RefineFolders : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    torch::NoGradGuard no_grad;
+    torch::manual_seed(0);
+    root = fs::temp_directory_path() / ("u3d_test_refine_" + std::to_string(::getpid()));
+    fs::remove_all(root);
+    paths = {root / "stable-diffusion-v1-5", root / "ckpt", root / "IP-Adapter"};
+
+    copy_into_folder(paths.base, {{golden_dir("unet_base") / "config.json", "unet/config.json"},
+                                  {golden_dir("unet_base") / "weights.safetensors", "unet/diffusion_pytorch_model.safetensors"},
+                                  {golden_dir("vae") / "config.json", "vae/config.json"},
+                                  {golden_dir("vae") / "weights.safetensors", "vae/diffusion_pytorch_model.safetensors"},
+                                  {golden_dir("clip_vision") / "preprocessor_config_tiny32.json",
+                                   "feature_extractor/preprocessor_config.json"},
+                                  {golden_dir("scheduler") / "sd_scheduler_config.json", "scheduler/scheduler_config.json"}});
+    // tokenizer/merges.txt: the openai merges uncompressed, as transformers' CLIPTokenizer files hold them.
+    gzFile gz = gzopen((golden_dir("clip_tokenizer") / "bpe_simple_vocab_16e6.txt.gz").c_str(), "rb");
+    ASSERT_NE(gz, nullptr);
+    std::string merges;
+    char buffer[1 << 16];
+    for (int n; (n = gzread(gz, buffer, sizeof(buffer))) > 0;) merges.append(buffer, size_t(n));
+    gzclose(gz);
+    fs::create_directories(paths.base / "tokenizer");
+    std::ofstream(paths.base / "tokenizer" / "merges.txt", std::ios::binary) << merges;
+
+    nlohmann::json text = golden_config("clip_text");
+    text["vocab_size"] = 49408;
+    text["hidden_size"] = 16;
+    write_json(paths.base / "text_encoder" / "config.json", text);
+    ClipTextModel text_encoder(ClipTextConfig::from_json(text, "text"), torch::TensorOptions());
+    save_safetensors(seeded_weights(*text_encoder), paths.base / "text_encoder" / "model.safetensors");
+
+    nlohmann::json controlnet_config = golden_config("controlnet");
+    controlnet_config["conditioning_embedding_out_channels"] = {8, 16};
+    write_json(paths.ckpt / "controlnet-tile" / "config.json", controlnet_config);
+    ControlNetModel controlnet(ControlNetConfig::from_json(controlnet_config, "controlnet"), torch::TensorOptions());
+    save_safetensors(seeded_weights(*controlnet), paths.ckpt / "controlnet-tile" / "diffusion_pytorch_model.safetensors");
+
+    copy_into_folder(paths.ip_adapter,
+                     {{golden_dir("clip_vision") / "config.json", "models/image_encoder/config.json"},
+                      {golden_dir("clip_vision") / "weights.safetensors", "models/image_encoder/model.safetensors"},
+                      {golden_dir("ip_adapter") / "weights.safetensors", "models/ip-adapter_sd15.safetensors"}});
+  }
+  void TearDown() override { fs::remove_all(root); }
+
+  fs::path root;
+  RefineCheckpoints paths;
+};
+
+TEST_F(RefineFolders, RunsTheImg2ImgTailEndToEnd) {
+  auto model = RefineModel::load(paths, Precision::kFp32);
+  std::vector<torch::Tensor> views;
+  for (int i = 0; i < 4; ++i) views.push_back(torch::randint(0, 256, {20, 20, 3}, torch::kUInt8));
+  const torch::Tensor front = torch::randint(0, 256, {40, 30, 3}, torch::kUInt8);
+  RefineSettings settings;
+  settings.size = 32;
+  settings.steps = 10;  // strength 0.2: the last 2 of 10 steps run
+  CountingNoise noise;
+  TensorMap trace;
+  const torch::Tensor out = model->run(views, front, settings, noise, &trace);
+
+  EXPECT_EQ(out.sizes(), (std::vector<int64_t>{4, 16, 16, 3}));
+  EXPECT_TRUE(torch::isfinite(out).all().item<bool>());
+  EXPECT_GE(out.min().item<float>(), 0.0f);
+  EXPECT_LE(out.max().item<float>(), 1.0f);
+  // VAE sample, img2img noise, one draw per step.
+  EXPECT_EQ(noise.draws, 4);
+  EXPECT_TRUE(torch::equal(trace.at("timesteps"), model->scheduler->timesteps().narrow(0, 8, 2)));
+  EXPECT_EQ(trace.at("grid").sizes(), (std::vector<int64_t>{40, 40, 3}));
+  EXPECT_TRUE(torch::equal(trace.at("grid").narrow(0, 20, 20).narrow(1, 0, 20), views[2]));
+  EXPECT_EQ(trace.at("prompt_embeds").sizes(), (std::vector<int64_t>{2, 77, 16}));
+  // The unconditional image embedding is zeros, the conditional one the front image's.
+  EXPECT_EQ(trace.at("image_embeds")[0].abs().max().item<float>(), 0.0f);
+  EXPECT_GT(trace.at("image_embeds")[1].abs().max().item<float>(), 0.0f);
+  // The quarters are the decoded grid in grid order.
+  EXPECT_TRUE(torch::equal(out[3], trace.at("images").narrow(0, 16, 16).narrow(1, 16, 16)));
+}
+
+TEST_F(RefineFolders, ListsTheFilesItReads) {
+  const auto files = RefineModel::files(paths);
+  EXPECT_EQ(files.size(), 14u);
+  for (const auto& f : files) EXPECT_TRUE(fs::is_regular_file(f)) << f;
+  EXPECT_EQ(files.back(), paths.ip_adapter / "models" / "ip-adapter_sd15.safetensors");
+}
+
+TEST_F(RefineFolders, MissingFilesAreNamed) {
+  fs::remove(paths.ip_adapter / "models" / "ip-adapter_sd15.safetensors");
+  EXPECT_THROW(RefineModel::files(paths), u3d::Error);
+  try {
+    RefineModel::load(paths, Precision::kFp32);
+    FAIL() << "no error";
+  } catch (const u3d::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("ip-adapter_sd15.safetensors"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("h94/IP-Adapter"), std::string::npos) << e.what();
+  }
+  fs::remove_all(paths.ckpt / "controlnet-tile");
+  try {
+    RefineModel::load(paths, Precision::kFp32);
+    FAIL() << "no error";
+  } catch (const u3d::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("controlnet-tile"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(RefineFolders, RejectsBadInputs) {
+  auto model = RefineModel::load(paths, Precision::kFp32);
+  CountingNoise noise;
+  std::vector<torch::Tensor> views(3, torch::zeros({20, 20, 3}, torch::kUInt8));
+  const torch::Tensor front = torch::zeros({20, 20, 3}, torch::kUInt8);
+  RefineSettings settings;
+  settings.size = 32;
+  EXPECT_THROW(model->run(views, front, settings, noise), u3d::Error);
+  views.push_back(torch::zeros({20, 20, 3}, torch::kUInt8));
+  settings.size = 30;
+  EXPECT_THROW(model->run(views, front, settings, noise), u3d::Error);
+  settings.size = 32;
+  settings.steps = 4;  // 4 x 0.2 rounds down to no step
+  EXPECT_THROW(model->run(views, front, settings, noise), u3d::Error);
+  EXPECT_EQ(noise.draws, 0);
+}
+
+}  // namespace
+}  // namespace u3d::nn
