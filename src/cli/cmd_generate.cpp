@@ -74,7 +74,8 @@ const CommandRegistration registration{
       sub.add_option("-o,--output", r.output, "Output mesh (.glb, .obj or .ply)")->required();
       add_network_options(sub, a->network);
       sub.add_flag("--no-refine", a->no_refine,
-                   "Skip the ControlNet-tile refinement of the four views (resize them to 512 px instead)");
+                   "Skip the ControlNet-tile refinement of the four views (resize them to 512 px instead; the "
+                   "stable-diffusion-v1-5, controlnet-tile and IP-Adapter folders are then not needed)");
       sub.add_option("--steps", a->steps, "Denoising steps of the multi-view and normal models (default: 30 each)")
           ->check(CLI::Range(1, 1000));
       sub.add_option("--keep-intermediates", r.keep_intermediates,

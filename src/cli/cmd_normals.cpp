@@ -11,6 +11,7 @@ struct NormalArgs {
   NormalRequest request;
   std::filesystem::path front;
   NetworkArgs network;
+  bool no_upscale = false;
 };
 
 const CommandRegistration registration{
@@ -30,9 +31,11 @@ const CommandRegistration registration{
       sub.add_option("--guidance", r.options.guidance_scale, "Classifier-free guidance scale")
           ->capture_default_str()
           ->check(number_in(0.0, 100.0));
+      sub.add_flag("--no-upscale", args->no_upscale, "Keep the normal maps at the model's 512 px (no Real-ESRGAN x4)");
       return [args] {
         NormalRequest request = args->request;
         if (!args->front.empty()) request.front = args->front;
+        request.options.upscale = !args->no_upscale;
         request.network = args->network.resolved();
         print_stage_summary(predict_view_normals(request));
       };

@@ -12,7 +12,7 @@ NetworkOptions NetworkArgs::resolved() const {
   return o;
 }
 
-void add_network_options(CLI::App& sub, NetworkArgs& args) {
+void add_network_options(CLI::App& sub, NetworkArgs& args, bool seeded) {
   sub.add_option("--models", args.options.models,
                  "Folder with the network weights: the official release's ckpt/ folder (docs/models.md)")
       ->required();
@@ -20,8 +20,9 @@ void add_network_options(CLI::App& sub, NetworkArgs& args) {
                  "Precision of the networks: auto (bf16 on CPUs with avx512_bf16, else fp32), fp32 or bf16")
       ->capture_default_str()
       ->check(CLI::IsMember({"auto", "fp32", "bf16", "fp16"}));
-  sub.add_option("--seed", args.options.seed, "Seed of the diffusion noise (same seed, same result)")
-      ->capture_default_str();
+  if (seeded)
+    sub.add_option("--seed", args.options.seed, "Seed of the diffusion noise (same seed, same result)")
+        ->capture_default_str();
 }
 
 void print_stage_summary(const NetworkStageSummary& summary) {

@@ -7,8 +7,11 @@
 #include "core/error.h"
 #include "core/view_set.h"
 #include "nn/pipelines/unique3d_multiview.h"
+#include "nn/pipelines/input_photo.h"
 #include "nn/pipelines/unique3d_normal.h"
+#include "nn/pipelines/unique3d_refine.h"
 #include "nn/preprocess/pil_resize.h"
+#include "pipeline/image_stages.h"
 #include "pipeline/model_folder.h"
 
 namespace u3d {
@@ -22,7 +25,8 @@ enum Stage { kPrepare, kMultiView, kRefine, kUpscale, kNormals, kReconstruct, kS
 // certainly not an object photo the networks can use (they see it at most at 2048 px).
 constexpr int kMinPhotoSide = 64;
 constexpr int kMaxPhotoSide = 8192;
-constexpr int kRefinedSize = 512;  // the views after refinement (or its replacement, a Lanczos resize)
+constexpr int kRefinedSize = 512;
+constexpr int kSuperResolveMaxWidth = int(nn::kSuperResolveMaxWidth);  // the views after refinement (or its replacement, a Lanczos resize)
 
 // Where a stage's outputs live inside the intermediates folder.
 fs::path stage_folder(Stage stage) {
@@ -88,15 +92,6 @@ bool opaque(const Image& rgba) {
   return true;
 }
 
-// change_rgba_bg(image, "white") of the official app: the colour composited over white, alpha kept.
-Image on_white_keeping_alpha(const Image& rgba) {
-  const Image rgb = composite_over_white(rgba);
-  Image out = rgba;
-  for (size_t i = 0; i < out.pixel_count(); ++i)
-    for (int c = 0; c < 3; ++c) out.data[4 * i + c] = rgb.data[3 * i + c];
-  return out;
-}
-
 Image lanczos_resize(const Image& rgb, int size) {
   const torch::Tensor resized = nn::pil_resize(nn::image_to_uint8_rgb(rgb), size, size, nn::PilFilter::Lanczos);
   const torch::Tensor f = resized.to(torch::kFloat).div(255).contiguous();
@@ -153,10 +148,10 @@ struct Run {
   void run(Stage stage, const std::optional<Image>& photo) {
     switch (stage) {
       case kPrepare: {
-        StageTimer timer("prepare");
-        front = on_white_keeping_alpha(*photo);
+        NetworkStageSummary st;
+        front = run_prepare_stage(*photo, request.network, st);
         keep({{"front.png", &front}});
-        report(stage, timer.finish(), false);
+        report(stage, st.total_seconds(), false);
         break;
       }
       case kMultiView: {
@@ -167,14 +162,32 @@ struct Run {
         break;
       }
       case kRefine: {
-        StageTimer timer("resizing the views to 512 px");
-        for (Image& view : views) view = lanczos_resize(view, kRefinedSize);
+        if (request.refine) {
+          NetworkStageSummary st;
+          views = run_refine_stage(views, front, request.network, request.refine_options, st);
+          report(stage, st.total_seconds(), false);
+        } else {
+          StageTimer timer("resizing the views to 512 px");
+          for (Image& view : views) view = lanczos_resize(view, kRefinedSize);
+          report(stage, timer.finish(), false);
+        }
         keep_views(stage);
-        report(stage, timer.finish(), false);
         break;
       }
-      case kUpscale:
+      case kUpscale: {
+        // The side views x4; the front view is the prepared photo, x4 when at most 512 px wide.
+        NetworkStageSummary st;
+        std::vector<Image> inputs(views.begin() + 1, views.end());
+        const bool small_front = front.width <= kSuperResolveMaxWidth;
+        if (small_front) inputs.push_back(front);
+        std::vector<Image> upscaled = run_upscale_stage(inputs, request.network, st);
+        for (size_t i = 1; i < 4; ++i) views[i] = std::move(upscaled[i - 1]);
+        if (small_front) front = std::move(upscaled[3]);
+        views[size_t(View::Front)] = front;
+        keep_views(stage);
+        report(stage, st.total_seconds(), false);
         break;
+      }
       case kNormals: {
         // The front view is the prepared photo, as in the official geo_reconstruct.
         NetworkStageSummary s;
@@ -227,7 +240,6 @@ GenerateSummary generate(const GenerateRequest& request, ProgressListener* liste
   if (listener) scope.emplace(listener);
   check_mesh_output(request.output);
   require(request.multiview.steps >= 1 && request.normals.steps >= 1, "denoising steps must be at least 1");
-  require(request.refine == false, "refinement (ControlNet-tile) is not available yet: use --no-refine");
 
   // Where to start: after the last stage whose outputs are all in from_intermediates.
   Stage start = kPrepare;
@@ -251,13 +263,16 @@ GenerateSummary generate(const GenerateRequest& request, ProgressListener* liste
   if (start == kPrepare) {
     photo = load_photo(request.image);
     require(!fully_transparent(*photo), "photo " + request.image.string() + " is fully transparent: nothing to reconstruct");
-    require(!opaque(*photo), "photo " + request.image.string() +
-                                 " has no transparent background; background removal is not available yet: give the "
-                                 "object on a transparent background (RGBA PNG)");
   }
   const ModelFolder models(request.network.models);
+  if (start <= kPrepare && opaque(*photo)) models.matting();
   if (start <= kMultiView) nn::MultiViewModel::files(models.img2mvimg());
-  if (start <= kNormals) nn::NormalModel::files(models.image_variations_for_normals(), models.image2normal());
+  if (start <= kRefine && request.refine)
+    nn::RefineModel::files({models.stable_diffusion(), models.root(), models.ip_adapter()});
+  if (start <= kNormals) {
+    models.upscaler();
+    nn::NormalModel::files(models.image_variations_for_normals(), models.image2normal());
+  }
 
   Run run(request);
   run.summary.precision = resolve_precision(request.network);

@@ -18,6 +18,7 @@
 
 #include "core/progress.h"
 #include "isomer/reconstruct.h"
+#include "pipeline/image_stages.h"
 #include "pipeline/multiview_stage.h"
 #include "pipeline/network_stage.h"
 #include "pipeline/normal_stage.h"
@@ -33,6 +34,7 @@ struct GenerateRequest {
   std::filesystem::path keep_intermediates;    // empty: none written
   std::filesystem::path from_intermediates;    // empty: start from the photo
   MultiViewOptions multiview;
+  RefineOptions refine_options;
   NormalOptions normals;
   ReconstructOptions reconstruct;
   bool official_output_scale = false;  // as ReconstructRequest

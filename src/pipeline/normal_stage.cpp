@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "core/view_set.h"
 #include "nn/pipelines/unique3d_normal.h"
+#include "nn/pipelines/upscale.h"
 #include "nn/preprocess/pil_resize.h"
 #include "pipeline/model_folder.h"
 
@@ -104,6 +105,17 @@ ViewSetImages run_normal_stage(const std::array<Image, 4>& views, const NetworkO
   const torch::Tensor maps = model->run(inputs, settings, noise);
   model.reset();
   summary.timings.push_back({"normals", timer.finish()});
+  std::vector<torch::Tensor> normal_maps;
+  for (int64_t i = 0; i < maps.size(0); ++i) normal_maps.push_back(maps[i]);
+  if (options.upscale) {
+    StageTimer load_upscaler("loading the upscaler");
+    auto upscaler = nn::UpscaleModel::load(folder.upscaler(), summary.precision);
+    summary.timings.push_back({"load upscaler", load_upscaler.finish()});
+    StageTimer upscale_timer("upscaling the normal maps x4");
+    for (torch::Tensor& map : normal_maps)
+      map = upscaler->upscale(map.mul(255).round().clamp(0, 255).to(torch::kUInt8).contiguous()).to(torch::kFloat).div(255);
+    summary.timings.push_back({"upscale normals", upscale_timer.finish()});
+  }
   summary.peak_memory_mib = peak_memory_mib();
 
   ViewSetImages out;
@@ -111,7 +123,7 @@ ViewSetImages run_normal_stage(const std::array<Image, 4>& views, const NetworkO
   for (const Image& view : views) rgb_size = std::max(rgb_size, view.width);
   for (View v : kAllViews) {
     const size_t i = size_t(v);
-    out.normals[i] = key_and_rotate(maps[int(i)], v);
+    out.normals[i] = key_and_rotate(normal_maps[i], v);
     const Image rgb = resized_square(views[i], rgb_size);
     if (v == View::Front && views[i].channels == 4) {
       out.rgb[i] = rgb;

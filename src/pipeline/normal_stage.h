@@ -2,7 +2,8 @@
 // The facade's normal-map stage (`unique3d normals`, and a stage of `generate`): four views in, a view
 // set out (core/view_set.h), ready for ISOMER. As the official geo_reconstruct and predict_normals do:
 // each view composited over white and resized to 512 px (Lanczos), one normal map per view from the
-// image2normal model (30 steps, guidance 1.5), the background keyed out by its colour (a pixel whose
+// image2normal model (30 steps, guidance 1.5), super-resolved x4 (Real-ESRGAN), the background keyed out
+// by its colour (a pixel whose
 // colour differs from the corner pixel (0,0) by at most 80 in the sum of its three 8-bit channels is
 // background), and each map rotated from its view's camera space to world space. Masks: the front RGB
 // image keeps its own alpha and lends it to the front normal map; the other views take their normal
@@ -21,6 +22,7 @@ struct NormalOptions {
   int size = 512;  // side of the model's input and output; the model was trained at 512
   int steps = 30;
   double guidance_scale = 1.5;  // geo_reconstruct's value (predict_normals' own default is 2.0)
+  bool upscale = true;          // Real-ESRGAN x4 on each map before its background is keyed out
 };
 
 struct ViewSetImages {

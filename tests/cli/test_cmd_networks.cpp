@@ -1,5 +1,6 @@
-// The network subcommands' bad inputs give a clear message, a non-zero exit and no output. (The stages
-// themselves run in tests/pipeline/test_network_stages.cpp, on the tiny models at a small size.)
+// The network subcommands on the tiny models: `upscale` and `matte` write their images; bad inputs give a
+// clear message, a non-zero exit and no output. (The diffusion stages run in
+// tests/pipeline/test_network_stages.cpp and test_generate.cpp, on the tiny models at a small size.)
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -46,6 +47,24 @@ class NetworkCommands : public ::testing::Test {
   static fs::path* dir;
 };
 fs::path* NetworkCommands::dir = nullptr;
+
+TEST_F(NetworkCommands, UpscaleAndMatteWriteTheirImages) {
+  Image photo(24, 20, 3, 0.3f);
+  for (int x = 6; x < 18; ++x) photo.pixel(x, 10)[0] = 0.9f;
+  save_image(photo, *dir / "small.png");
+  CliResult r = run_cli("upscale " + (*dir / "small.png").string() + " -o " + (*dir / "x4.png").string() + models(),
+                        *dir / "u.log");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const Image x4 = load_image(*dir / "x4.png");
+  EXPECT_EQ(x4.width, 96);
+  EXPECT_EQ(x4.height, 80);
+  r = run_cli("matte " + (*dir / "small.png").string() + " -o " + (*dir / "cut.png").string() + models(),
+              *dir / "m.log");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const Image cut = load_image(*dir / "cut.png");
+  EXPECT_EQ(cut.width, 24);
+  EXPECT_EQ(cut.channels, 4);
+}
 
 TEST_F(NetworkCommands, BadInputsAreNamedAndWriteNothing) {
   const fs::path out = *dir / "never";

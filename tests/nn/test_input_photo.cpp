@@ -63,9 +63,18 @@ RRDBNet nearest_neighbour_rrdbnet() {
 
 TEST(InputPhoto, OnlyPhotosAtMost512PxWideAreSuperResolved) {
   set_progress_quiet(true);
-  UpscaleModel upscaler;
-  upscaler.net = nearest_neighbour_rrdbnet();
-  auto matting = MattingModel::load(golden_dir("u2net_tiny") / "u2net_div8" / "u2net_div8_op17.onnx", Precision::kFp32);
+  int upscaler_loads = 0, matting_loads = 0;
+  const InputPhotoModels models{[&] {
+                                  ++upscaler_loads;
+                                  auto upscaler = std::make_unique<UpscaleModel>();
+                                  upscaler->net = nearest_neighbour_rrdbnet();
+                                  return upscaler;
+                                },
+                                [&] {
+                                  ++matting_loads;
+                                  return MattingModel::load(golden_dir("u2net_tiny") / "u2net_div8" / "u2net_div8_op17.onnx",
+                                                            Precision::kFp32);
+                                }};
   // A photo with a real alpha (so no background removal is forced): an opaque disc on transparency.
   auto photo = [](int64_t w, int64_t h) {
     torch::Tensor rgba = torch::full({h, w, 4}, 120, torch::kUInt8);
@@ -75,10 +84,13 @@ TEST(InputPhoto, OnlyPhotosAtMost512PxWideAreSuperResolved) {
   };
   // The disc (radius 8) is 17 px across, less the official crop's last row and column: 16. A photo 512 px
   // wide is upscaled x4 first (68 - 1), one 520 px wide is not.
-  const torch::Tensor small = prepare_input_photo(photo(512, 24), upscaler, *matting, false);
-  const torch::Tensor large = prepare_input_photo(photo(520, 24), upscaler, *matting, false);
+  const torch::Tensor small = prepare_input_photo(photo(512, 24), models, false);
+  const torch::Tensor large = prepare_input_photo(photo(520, 24), models, false);
   EXPECT_EQ(small.size(0), 67);
   EXPECT_EQ(large.size(0), 16);
+  // Each network is loaded only when the photo needs it: one upscale, no background removal.
+  EXPECT_EQ(upscaler_loads, 1);
+  EXPECT_EQ(matting_loads, 0);
   // The colours are kept under the alpha.
   EXPECT_EQ(large[8][8][0].item<int>(), 120);
 }

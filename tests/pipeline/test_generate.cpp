@@ -1,5 +1,5 @@
-// `generate` end to end on the tiny golden models at a small size: a mesh file and every stage's
-// intermediates; resuming from each stage's intermediates; the photo checks.
+// `generate` end to end on the tiny golden models at a small size (every stage, refinement included): a
+// mesh file and every stage's intermediates; resuming from each stage's intermediates; the photo checks.
 #include "pipeline/generate.h"
 
 #include <gtest/gtest.h>
@@ -33,7 +33,8 @@ class Generate : public ::testing::Test {
     r.output = *dir / output;
     r.network.models = *dir / "models";
     r.network.precision = nn::Precision::kFp32;
-    r.refine = false;
+    r.refine_options.size = 64;
+    r.refine_options.steps = 10;  // strength 0.2: the last 2 run
     r.multiview.size = 32;
     r.multiview.steps = 2;
     r.normals.size = 32;
@@ -55,7 +56,7 @@ TEST_F(Generate, WritesTheMeshAndEveryStagesIntermediatesAndResumesFromThem) {
   ASSERT_EQ(s.stages.size(), generate_stage_names().size());
   for (const auto& stage : s.stages) EXPECT_FALSE(stage.resumed) << stage.name;
   EXPECT_TRUE(fs::exists(*dir / "kept" / "front.png"));
-  for (const char* folder : {"multiview", "refined", "views"})
+  for (const char* folder : {"multiview", "refined", "upscaled", "views"})
     EXPECT_TRUE(fs::exists(*dir / "kept" / folder / "left_rgb.png")) << folder;
   EXPECT_TRUE(fs::exists(*dir / "kept" / "views" / "left_normal.png"));
 

@@ -1,10 +1,12 @@
 #pragma once
 // A --models folder in the official layout (pipeline/model_folder.h) made of the tiny golden models of
-// tests/data/nn, and a small object photo, for tests of the network stages and commands.
+// tests/data/nn (every stage: multi-view, refinement, Real-ESRGAN, normals, background removal), and a
+// small object photo, for tests of the network stages and commands.
 #include <filesystem>
 
 #include "core/image.h"
 #include "nn/golden.h"
+#include "nn/refine_folders.h"
 
 namespace u3d::testing {
 
@@ -15,7 +17,10 @@ inline void write_tiny_model_folder(const std::filesystem::path& models) {
   write_image_variations_folder(models / "img2mvimg", /*unet_weights=*/false);
   copy_into_folder(models, {{golden_dir("unet_mv") / "weights.pth", "img2mvimg/unet_state_dict.pth"}});
   write_image_variations_folder(models / "sd-image-variations-diffusers", /*unet_weights=*/true);
-  copy_into_folder(models, {{golden_dir("unet_ref") / "weights.pth", "image2normal/unet_state_dict.pth"}});
+  copy_into_folder(models, {{golden_dir("unet_ref") / "weights.pth", "image2normal/unet_state_dict.pth"},
+                            {golden_dir("realesrgan_tiny") / "rrdbnet_tiny_op17.onnx", "realesrgan-x4.onnx"},
+                            {golden_dir("u2net_tiny") / "u2net_div8" / "u2net_div8_op17.onnx", "u2net.onnx"}});
+  nn::test::write_tiny_refine_folders({models / "stable-diffusion-v1-5", models, models / "IP-Adapter"});
 }
 
 // A 96 px object photo: a disk with a vertical colour ramp on a transparent background.

@@ -66,20 +66,21 @@ torch::Tensor simple_preprocess(const torch::Tensor& rgba) {
   return square;
 }
 
-torch::Tensor prepare_input_photo(const torch::Tensor& image, UpscaleModel& upscaler, MattingModel& matting,
-                                  bool remove_background) {
+torch::Tensor prepare_input_photo(const torch::Tensor& image, const InputPhotoModels& models, bool remove_background) {
   require(image.dim() == 3 && (image.size(2) == 3 || image.size(2) == 4) && image.scalar_type() == torch::kUInt8,
           "prepare_input_photo: expected a uint8 RGB or RGBA image [H, W, 3|4]");
   torch::Tensor photo = image;
   if (photo.size(1) <= kSuperResolveMaxWidth) {
+    const auto upscaler = models.upscaler();
     StageTimer stage("upscale input photo");
-    photo = upscaler.upscale(photo);
+    photo = upscaler->upscale(photo);
   }
   const bool opaque = photo.size(2) == 3 || (photo.select(2, 3) == 255).all().item<bool>();
   if (remove_background || opaque) {
+    const auto matting = models.matting();
     StageTimer stage("remove background");
     // rembg's remove: the mask from the RGB channels, the cut-out of the whole image.
-    const torch::Tensor mask = matting.matte(photo.slice(2, 0, 3).contiguous());
+    const torch::Tensor mask = matting->matte(photo.slice(2, 0, 3).contiguous());
     photo = cutout(photo, mask, MattingStyle::kRembg);
   }
   return simple_preprocess(colours_on_white(photo));

@@ -8,6 +8,9 @@
 // (docs/conventions.md, section 2.4).
 #include <torch/torch.h>
 
+#include <functional>
+#include <memory>
+
 #include "nn/pipelines/matting.h"
 #include "nn/pipelines/upscale.h"
 
@@ -31,8 +34,13 @@ torch::Tensor colours_on_white(const torch::Tensor& rgba);
 // box), pad to a centred square with (255, 255, 255, 0). An Error when no pixel has alpha > 60.
 torch::Tensor simple_preprocess(const torch::Tensor& rgba);
 
+// The networks the chain may need, loaded by these functions only when it does and freed right after.
+struct InputPhotoModels {
+  std::function<std::unique_ptr<UpscaleModel>()> upscaler;
+  std::function<std::unique_ptr<MattingModel>()> matting;
+};
+
 // The whole chain on uint8 [H, W, 3|4]; returns the square uint8 RGBA the multi-view stage starts from.
-torch::Tensor prepare_input_photo(const torch::Tensor& image, UpscaleModel& upscaler, MattingModel& matting,
-                                  bool remove_background);
+torch::Tensor prepare_input_photo(const torch::Tensor& image, const InputPhotoModels& models, bool remove_background);
 
 }  // namespace u3d::nn

@@ -1,0 +1,64 @@
+// `unique3d upscale`, `unique3d matte` and `unique3d refine`: the image stages around the diffusion
+// models, one command each (pipeline/image_stages.h).
+#include "cli/command.h"
+#include "cli/network_options.h"
+#include "pipeline/image_stages.h"
+
+namespace u3d::cli {
+namespace {
+
+struct ImageArgs {
+  ImageRequest request;
+  NetworkArgs network;
+};
+
+CommandSetup image_command(NetworkStageSummary (*run)(const ImageRequest&, ProgressListener*), const char* output_help) {
+  return [run, output_help](CLI::App& sub) {
+    auto a = std::make_shared<ImageArgs>();
+    sub.add_option("image", a->request.image, "Input image (PNG or JPEG)")->required();
+    sub.add_option("-o,--output", a->request.output, output_help)->required();
+    add_network_options(sub, a->network, /*seeded=*/false);
+    return [a, run] {
+      ImageRequest request = a->request;
+      request.network = a->network.resolved();
+      print_stage_summary(run(request, nullptr));
+    };
+  };
+}
+
+const CommandRegistration upscale{"upscale", "Super-resolve an image x4 with Real-ESRGAN (alpha is upscaled too)",
+                                  image_command(upscale_image, "Output image (.png keeps the alpha)")};
+const CommandRegistration matte{"matte", "Remove an image's background (U^2-Net or ISNet, as rembg does)",
+                                image_command(remove_background, "Output image with the background transparent (.png)")};
+
+struct RefineArgs {
+  RefineRequest request;
+  NetworkArgs network;
+};
+
+const CommandRegistration refine{
+    "refine", "Redraw four views at twice their size with ControlNet-tile and IP-Adapter (the official refine_rgb)",
+    [](CLI::App& sub) {
+      auto a = std::make_shared<RefineArgs>();
+      RefineRequest& r = a->request;
+      sub.add_option("views_dir", r.views_dir, "Folder with {front,right,back,left}_rgb.png (as `multiview` writes)")
+          ->required();
+      sub.add_option("-o,--output", r.output_dir, "Output folder: the refined {view}_rgb.png (512 px)")->required();
+      sub.add_option("--front", r.front, "The object photo on a transparent background, which the IP-Adapter sees")
+          ->required();
+      add_network_options(sub, a->network);
+      sub.add_option("--steps", r.options.steps, "Steps of the schedule, of which the last steps x strength run")
+          ->capture_default_str()
+          ->check(CLI::Range(1, 1000));
+      sub.add_option("--strength", r.options.strength, "How much of the schedule runs (0.2 redraws fine detail only)")
+          ->capture_default_str()
+          ->check(number_in(0.0, 1.0));
+      return [a] {
+        RefineRequest request = a->request;
+        request.network = a->network.resolved();
+        print_stage_summary(refine_views(request));
+      };
+    }};
+
+}  // namespace
+}  // namespace u3d::cli

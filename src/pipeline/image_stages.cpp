@@ -1,0 +1,127 @@
+#include "pipeline/image_stages.h"
+
+#include <optional>
+
+#include "core/atomic_file.h"
+#include "core/camera.h"
+#include "core/error.h"
+#include "core/view_set.h"
+#include "nn/pipelines/input_photo.h"
+#include "nn/pipelines/matting.h"
+#include "nn/pipelines/unique3d_refine.h"
+#include "nn/pipelines/upscale.h"
+#include "pipeline/model_folder.h"
+#include "pipeline/tensor_image.h"
+
+namespace u3d {
+namespace {
+
+nn::RefineCheckpoints refine_checkpoints(const ModelFolder& folder) {
+  return {folder.stable_diffusion(), folder.root(), folder.ip_adapter()};
+}
+
+}  // namespace
+
+Image run_prepare_stage(const Image& photo, const NetworkOptions& network, NetworkStageSummary& summary) {
+  const ModelFolder folder(network.models);
+  summary.precision = resolve_precision(network);
+  StageTimer timer("preparing the photo");
+  const nn::InputPhotoModels models{[&] { return nn::UpscaleModel::load(folder.upscaler(), summary.precision); },
+                                    [&] { return nn::MattingModel::load(folder.matting(), summary.precision); }};
+  const Image front = tensor_to_image(nn::prepare_input_photo(image_to_uint8(photo), models, false));
+  summary.timings.push_back({"prepare", timer.finish()});
+  summary.peak_memory_mib = peak_memory_mib();
+  return front;
+}
+
+std::array<Image, 4> run_refine_stage(const std::array<Image, 4>& views, const Image& front,
+                                      const NetworkOptions& network, const RefineOptions& options,
+                                      NetworkStageSummary& summary) {
+  const ModelFolder folder(network.models);
+  summary.precision = resolve_precision(network);
+  StageTimer load_timer("loading the refinement models");
+  auto model = nn::RefineModel::load(refine_checkpoints(folder), summary.precision);
+  summary.timings.push_back({"load refinement models", load_timer.finish()});
+
+  StageTimer timer("refining the views");
+  std::vector<torch::Tensor> inputs;
+  for (const Image& view : views) inputs.push_back(image_to_uint8(composite_over_white(view)));
+  nn::RefineSettings settings;
+  settings.size = options.size;
+  settings.steps = options.steps;
+  settings.strength = options.strength;
+  nn::SeededNoise noise(network.seed);
+  const torch::Tensor refined = model->run(inputs, image_to_uint8(composite_over_white(front)), settings, noise);
+  model.reset();
+  summary.timings.push_back({"refine", timer.finish()});
+  summary.peak_memory_mib = peak_memory_mib();
+  std::array<Image, 4> out;
+  for (View v : kAllViews) out[size_t(v)] = tensor_to_image(refined[int(v)]);
+  return out;
+}
+
+std::vector<Image> run_upscale_stage(const std::vector<Image>& images, const NetworkOptions& network,
+                                     NetworkStageSummary& summary) {
+  const ModelFolder folder(network.models);
+  summary.precision = resolve_precision(network);
+  StageTimer load_timer("loading the upscaler");
+  auto model = nn::UpscaleModel::load(folder.upscaler(), summary.precision);
+  summary.timings.push_back({"load upscaler", load_timer.finish()});
+  StageTimer timer("upscaling x4");
+  std::vector<Image> out;
+  for (const Image& image : images) out.push_back(tensor_to_image(model->upscale(image_to_uint8(image))));
+  summary.timings.push_back({"upscale", timer.finish()});
+  summary.peak_memory_mib = peak_memory_mib();
+  return out;
+}
+
+NetworkStageSummary upscale_image(const ImageRequest& request, ProgressListener* listener) {
+  std::optional<ProgressScope> scope;
+  if (listener) scope.emplace(listener);
+  const Image image = load_image(request.image);
+  NetworkStageSummary summary;
+  const Image out = run_upscale_stage({image}, request.network, summary).front();
+  save_image(out, request.output);
+  summary.written.push_back(request.output);
+  return summary;
+}
+
+NetworkStageSummary remove_background(const ImageRequest& request, ProgressListener* listener) {
+  std::optional<ProgressScope> scope;
+  if (listener) scope.emplace(listener);
+  const Image image = load_image(request.image);
+  const ModelFolder folder(request.network.models);
+  NetworkStageSummary summary;
+  summary.precision = resolve_precision(request.network);
+  StageTimer load_timer("loading the background-removal model");
+  auto model = nn::MattingModel::load(folder.matting(), summary.precision);
+  summary.timings.push_back({"load matting model", load_timer.finish()});
+  StageTimer timer("removing the background");
+  const torch::Tensor pixels = image_to_uint8(image);
+  const torch::Tensor mask = model->matte(pixels.slice(2, 0, 3).contiguous());
+  const Image out = tensor_to_image(nn::cutout(pixels, mask, model->style));
+  model.reset();
+  summary.timings.push_back({"matte", timer.finish()});
+  summary.peak_memory_mib = peak_memory_mib();
+  save_image(out, request.output);
+  summary.written.push_back(request.output);
+  return summary;
+}
+
+NetworkStageSummary refine_views(const RefineRequest& request, ProgressListener* listener) {
+  std::optional<ProgressScope> scope;
+  if (listener) scope.emplace(listener);
+  require(request.options.steps >= 1, "refinement steps must be at least 1");
+  std::array<Image, 4> views;
+  for (View v : kAllViews) views[size_t(v)] = load_image(request.views_dir / view_file_name(v, false));
+  const Image front = load_image(request.front);
+  NetworkStageSummary summary;
+  const std::array<Image, 4> refined = run_refine_stage(views, front, request.network, request.options, summary);
+  write_folder_atomically(request.output_dir, [&](const std::filesystem::path& folder) {
+    for (View v : kAllViews) save_image(refined[size_t(v)], folder / view_file_name(v, false));
+  });
+  for (View v : kAllViews) summary.written.push_back(request.output_dir / view_file_name(v, false));
+  return summary;
+}
+
+}  // namespace u3d
