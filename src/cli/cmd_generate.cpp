@@ -31,9 +31,8 @@ nlohmann::json summary_json(const GenerateSummary& s) {
                            {"resumed", stage.resumed}});
   j["total_seconds"] = s.total_seconds();
   const ReconstructSummary& r = s.reconstruction;
-  j["mesh"] = {{"vertices", r.mesh.vertex_count()},
-               {"faces", r.mesh.face_count()},
-               {"silhouette_iou", r.silhouette_iou}};
+  j["mesh"] = {
+      {"vertices", r.mesh.vertex_count()}, {"faces", r.mesh.face_count()}, {"silhouette_iou", r.silhouette_iou}};
   for (const auto& path : s.written) j["written"].push_back(path.string());
   return j;
 }
@@ -52,7 +51,8 @@ void run(const GenerateArgs& a) {
     if (stage.resumed)
       std::printf("  %-12s from the intermediates\n", stage.name.c_str());
     else
-      std::printf("  %-12s %8.1f s   peak memory %6.0f MiB\n", stage.name.c_str(), stage.seconds, stage.peak_memory_mib);
+      std::printf("  %-12s %8.1f s   peak memory %6.0f MiB\n", stage.name.c_str(), stage.seconds,
+                  stage.peak_memory_mib);
   }
   std::printf("  %-12s %8.1f s\n", "total", s.total_seconds());
   if (!a.json_path.empty())

@@ -12,7 +12,8 @@ struct ImageArgs {
   NetworkArgs network;
 };
 
-CommandSetup image_command(NetworkStageSummary (*run)(const ImageRequest&, ProgressListener*), const char* output_help) {
+CommandSetup image_command(NetworkStageSummary (*run)(const ImageRequest&, ProgressListener*),
+                           const char* output_help) {
   return [run, output_help](CLI::App& sub) {
     auto a = std::make_shared<ImageArgs>();
     sub.add_option("image", a->request.image, "Input image (PNG or JPEG)")->required();
@@ -28,8 +29,9 @@ CommandSetup image_command(NetworkStageSummary (*run)(const ImageRequest&, Progr
 
 const CommandRegistration upscale{"upscale", "Super-resolve an image x4 with Real-ESRGAN (alpha is upscaled too)",
                                   image_command(upscale_image, "Output image (.png keeps the alpha)")};
-const CommandRegistration matte{"matte", "Remove an image's background (U^2-Net or ISNet, as rembg does)",
-                                image_command(remove_background, "Output image with the background transparent (.png)")};
+const CommandRegistration matte{
+    "matte", "Remove an image's background (U^2-Net or ISNet, as rembg does)",
+    image_command(remove_background, "Output image with the background transparent (.png)")};
 
 struct RefineArgs {
   RefineRequest request;

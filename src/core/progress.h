@@ -16,9 +16,9 @@ namespace u3d {
 struct ProgressEvent {
   enum class Kind { StageBegin, StageEnd, Message, Step };
   Kind kind = Kind::Message;
-  std::string text;   // the stage's name, or the message
+  std::string text;      // the stage's name, or the message
   double seconds = 0.0;  // StageEnd: the stage's time
-  int step = 0;       // Step: 1-based step of `steps`, in the stage named by `text`
+  int step = 0;          // Step: 1-based step of `steps`, in the stage named by `text`
   int steps = 0;
 };
 
@@ -48,7 +48,7 @@ class StderrProgress : public ProgressListener {
   std::FILE* out_;
   Clock::time_point stage_begin_ = Clock::now();  // the last StageBegin: where a loop's time starts
   Clock::time_point last_line_ = Clock::now();
-  std::string loop_;       // the loop whose steps are being counted
+  std::string loop_;  // the loop whose steps are being counted
   int last_step_ = 0;
   bool loop_printed_ = false;
 };
@@ -76,7 +76,7 @@ void set_progress_quiet(bool quiet);
 
 void progress(const std::string& message);
 void progress_step(const std::string& stage, int step, int steps);  // also checks for cancellation
-void check_cancelled();  // throws Cancelled when the listener asks to stop
+void check_cancelled();                                             // throws Cancelled when the listener asks to stop
 
 // Times a stage: reports its start on construction (after a cancellation check) and its end with the
 // elapsed time on finish() or on destruction, unless an exception is leaving the stage.

@@ -6,8 +6,8 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/view_set.h"
-#include "nn/pipelines/unique3d_multiview.h"
 #include "nn/pipelines/input_photo.h"
+#include "nn/pipelines/unique3d_multiview.h"
 #include "nn/pipelines/unique3d_normal.h"
 #include "nn/pipelines/unique3d_refine.h"
 #include "nn/preprocess/pil_resize.h"
@@ -26,7 +26,8 @@ enum Stage { kPrepare, kMultiView, kRefine, kUpscale, kNormals, kReconstruct, kS
 constexpr int kMinPhotoSide = 64;
 constexpr int kMaxPhotoSide = 8192;
 constexpr int kRefinedSize = 512;
-constexpr int kSuperResolveMaxWidth = int(nn::kSuperResolveMaxWidth);  // the views after refinement (or its replacement, a Lanczos resize)
+constexpr int kSuperResolveMaxWidth =
+    int(nn::kSuperResolveMaxWidth);  // the views after refinement (or its replacement, a Lanczos resize)
 
 // Where a stage's outputs live inside the intermediates folder.
 fs::path stage_folder(Stage stage) {
@@ -216,8 +217,7 @@ struct Run {
                                summary.reconstruction.written.end());
         break;
       }
-      case kStageCount:
-        break;
+      case kStageCount: break;
     }
   }
 };
@@ -262,7 +262,8 @@ GenerateSummary generate(const GenerateRequest& request, ProgressListener* liste
   std::optional<Image> photo;
   if (start == kPrepare) {
     photo = load_photo(request.image);
-    require(!fully_transparent(*photo), "photo " + request.image.string() + " is fully transparent: nothing to reconstruct");
+    require(!fully_transparent(*photo),
+            "photo " + request.image.string() + " is fully transparent: nothing to reconstruct");
   }
   const ModelFolder models(request.network.models);
   if (start <= kPrepare && opaque(*photo)) models.matting();

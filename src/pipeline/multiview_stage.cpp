@@ -49,9 +49,8 @@ NetworkStageSummary generate_views(const MultiViewRequest& request, ProgressList
   require(request.options.steps >= 1, "multi-view steps must be at least 1");
   require(request.options.size >= 8 && request.options.size % 8 == 0, "multi-view size must be a multiple of 8");
   const Image front = load_image(request.image);
-  require(front.channels == 4,
-          "image " + request.image.string() +
-              " has no alpha channel: give the object on a transparent background (RGBA PNG)");
+  require(front.channels == 4, "image " + request.image.string() +
+                                   " has no alpha channel: give the object on a transparent background (RGBA PNG)");
   bool transparent = false;
   for (size_t i = 0; i < front.pixel_count() && !transparent; ++i) transparent = front.data[4 * i + 3] < 1.f;
   require(transparent, "image " + request.image.string() +

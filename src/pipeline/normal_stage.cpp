@@ -113,7 +113,9 @@ ViewSetImages run_normal_stage(const std::array<Image, 4>& views, const NetworkO
     summary.timings.push_back({"load upscaler", load_upscaler.finish()});
     StageTimer upscale_timer("upscaling the normal maps x4");
     for (torch::Tensor& map : normal_maps)
-      map = upscaler->upscale(map.mul(255).round().clamp(0, 255).to(torch::kUInt8).contiguous()).to(torch::kFloat).div(255);
+      map = upscaler->upscale(map.mul(255).round().clamp(0, 255).to(torch::kUInt8).contiguous())
+                .to(torch::kFloat)
+                .div(255);
     summary.timings.push_back({"upscale normals", upscale_timer.finish()});
   }
   summary.peak_memory_mib = peak_memory_mib();
@@ -153,9 +155,8 @@ NetworkStageSummary predict_view_normals(const NormalRequest& request, ProgressL
   require(request.options.size >= 8 && request.options.size % 8 == 0, "normal-map size must be a multiple of 8");
   std::array<Image, 4> views;
   for (View v : kAllViews) {
-    const std::filesystem::path path = v == View::Front && request.front
-                                           ? *request.front
-                                           : request.views_dir / view_file_name(v, /*normal=*/false);
+    const std::filesystem::path path =
+        v == View::Front && request.front ? *request.front : request.views_dir / view_file_name(v, /*normal=*/false);
     Image image = load_image(path);
     require(image.width == image.height, path.string() + ": views must be square (it is " +
                                              std::to_string(image.width) + "x" + std::to_string(image.height) + ")");

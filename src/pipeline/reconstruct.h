@@ -21,8 +21,8 @@ inline constexpr float kOfficialOutputScale = 0.675f;
 struct ReconstructRequest {
   std::filesystem::path views_dir;  // front/right/back/left _rgb.png and _normal.png (core/view_set.h)
   NormalSpace normal_space = NormalSpace::World;
-  std::filesystem::path output;  // .glb, .obj or .ply
-  bool previews = false;         // also <stem>_views.png (the four views) and <stem>_turntable.png
+  std::filesystem::path output;        // .glb, .obj or .ply
+  bool previews = false;               // also <stem>_views.png (the four views) and <stem>_turntable.png
   bool official_output_scale = false;  // write the mesh scaled by kOfficialOutputScale
   ReconstructOptions options;
 };

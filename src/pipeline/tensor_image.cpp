@@ -22,7 +22,8 @@ torch::Tensor image_to_uint8(const Image& image) {
 }
 
 Image tensor_to_image(const torch::Tensor& hwc) {
-  torch::Tensor t = hwc.scalar_type() == torch::kUInt8 ? hwc.to(torch::kFloat).div(255.f) : hwc.to(torch::kFloat).clamp(0, 1);
+  torch::Tensor t =
+      hwc.scalar_type() == torch::kUInt8 ? hwc.to(torch::kFloat).div(255.f) : hwc.to(torch::kFloat).clamp(0, 1);
   t = t.contiguous();
   Image image(int(t.size(1)), int(t.size(0)), int(t.size(2)));
   std::memcpy(image.data.data(), t.data_ptr<float>(), image.data.size() * sizeof(float));

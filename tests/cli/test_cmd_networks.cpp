@@ -71,7 +71,8 @@ TEST_F(NetworkCommands, BadInputsAreNamedAndWriteNothing) {
   // A photo without transparency.
   Image opaque(64, 64, 3, 0.5f);
   save_image(opaque, *dir / "opaque.png");
-  CliResult r = run_cli("multiview " + (*dir / "opaque.png").string() + " -o " + out.string() + models(), *dir / "b1.log");
+  CliResult r =
+      run_cli("multiview " + (*dir / "opaque.png").string() + " -o " + out.string() + models(), *dir / "b1.log");
   EXPECT_EQ(r.status, 1 << 8) << r.output;
   EXPECT_NE(r.output.find("opaque.png"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("alpha"), std::string::npos) << r.output;

@@ -33,7 +33,8 @@ TEST(StderrProgress, PrintsStepsOfSlowLoopsWithTheTimeLeft) {
   }
   const std::string text = printed(f);
   EXPECT_NE(text.find("[unique3d] denoising ...\n"), std::string::npos) << text;
-  EXPECT_TRUE(std::regex_search(text, std::regex(R"(\[unique3d\] denoise 1/3, [0-9]+ s, about [0-9]+ s left\n)"))) << text;
+  EXPECT_TRUE(std::regex_search(text, std::regex(R"(\[unique3d\] denoise 1/3, [0-9]+ s, about [0-9]+ s left\n)")))
+      << text;
   EXPECT_TRUE(std::regex_search(text, std::regex(R"(\[unique3d\] denoise 3/3, [0-9]+ s\n)"))) << text;
   EXPECT_TRUE(std::regex_search(text, std::regex(R"(\[unique3d\] denoising done in [0-9.]+ s)"))) << text;
   std::fclose(f);

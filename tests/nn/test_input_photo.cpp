@@ -64,17 +64,17 @@ RRDBNet nearest_neighbour_rrdbnet() {
 TEST(InputPhoto, OnlyPhotosAtMost512PxWideAreSuperResolved) {
   set_progress_quiet(true);
   int upscaler_loads = 0, matting_loads = 0;
-  const InputPhotoModels models{[&] {
-                                  ++upscaler_loads;
-                                  auto upscaler = std::make_unique<UpscaleModel>();
-                                  upscaler->net = nearest_neighbour_rrdbnet();
-                                  return upscaler;
-                                },
-                                [&] {
-                                  ++matting_loads;
-                                  return MattingModel::load(golden_dir("u2net_tiny") / "u2net_div8" / "u2net_div8_op17.onnx",
-                                                            Precision::kFp32);
-                                }};
+  const InputPhotoModels models{
+      [&] {
+        ++upscaler_loads;
+        auto upscaler = std::make_unique<UpscaleModel>();
+        upscaler->net = nearest_neighbour_rrdbnet();
+        return upscaler;
+      },
+      [&] {
+        ++matting_loads;
+        return MattingModel::load(golden_dir("u2net_tiny") / "u2net_div8" / "u2net_div8_op17.onnx", Precision::kFp32);
+      }};
   // A photo with a real alpha (so no background removal is forced): an opaque disc on transparency.
   auto photo = [](int64_t w, int64_t h) {
     torch::Tensor rgba = torch::full({h, w, 4}, 120, torch::kUInt8);
