@@ -142,6 +142,8 @@ struct Run {
     if (stage == kPrepare) front = to_rgba(load_image(dir / "front.png"));
     if (stage == kMultiView || stage == kRefine || stage == kUpscale)
       for (View v : kAllViews) views[size_t(v)] = load_image(dir / stage_folder(stage) / view_file_name(v, false));
+    // The upscale stage's front view is the prepared photo, super-resolved when it was small.
+    if (stage == kUpscale) front = to_rgba(views[size_t(View::Front)]);
     if (stage == kNormals)
       view_set = load_view_set(dir / stage_folder(kNormals), NormalSpace::World, NormalCheck::kPredicted);
   }
