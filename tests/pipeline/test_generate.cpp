@@ -75,6 +75,16 @@ TEST_F(Generate, WritesTheMeshAndEveryStagesIntermediatesAndResumesFromThem) {
   }
 }
 
+TEST_F(Generate, Takes16BitPhotos) {
+  // A 16-bit PNG is read at full precision and handed to the networks as 8-bit values.
+  save_image(load_image(*dir / "photo.png"), *dir / "photo16.png", /*bit_depth=*/16);
+  GenerateRequest r = request("from16.glb");
+  r.image = *dir / "photo16.png";
+  r.refine = false;
+  generate(r);
+  EXPECT_GT(read_mesh(*dir / "from16.glb").face_count(), 0u);
+}
+
 TEST_F(Generate, PhotosNoStageCanUseAreNamed) {
   const auto expect_error = [&](const fs::path& photo, const std::string& needle) {
     GenerateRequest r = request("never.glb");
