@@ -1,5 +1,6 @@
 #include "pipeline/image_stages.h"
 
+#include <cctype>
 #include <optional>
 
 #include "core/atomic_file.h"
@@ -15,6 +16,16 @@
 
 namespace u3d {
 namespace {
+
+// An Error before any work when `output` cannot be an image file save_image writes.
+void check_image_output(const std::filesystem::path& output) {
+  std::string ext = output.extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  require(ext == ".png" || ext == ".jpg" || ext == ".jpeg",
+          "output " + output.string() + ": unsupported extension (use .png, or .jpg without alpha)");
+  const std::filesystem::path dir = output.parent_path().empty() ? "." : output.parent_path();
+  require(std::filesystem::is_directory(dir), "output folder " + dir.string() + " does not exist");
+}
 
 nn::RefineCheckpoints refine_checkpoints(const ModelFolder& folder) {
   return {folder.stable_diffusion(), folder.root(), folder.ip_adapter()};
@@ -78,6 +89,7 @@ std::vector<Image> run_upscale_stage(const std::vector<Image>& images, const Net
 NetworkStageSummary upscale_image(const ImageRequest& request, ProgressListener* listener) {
   std::optional<ProgressScope> scope;
   if (listener) scope.emplace(listener);
+  check_image_output(request.output);
   const Image image = load_image(request.image);
   NetworkStageSummary summary;
   const Image out = run_upscale_stage({image}, request.network, summary).front();
@@ -89,6 +101,7 @@ NetworkStageSummary upscale_image(const ImageRequest& request, ProgressListener*
 NetworkStageSummary remove_background(const ImageRequest& request, ProgressListener* listener) {
   std::optional<ProgressScope> scope;
   if (listener) scope.emplace(listener);
+  check_image_output(request.output);
   const Image image = load_image(request.image);
   const ModelFolder folder(request.network.models);
   NetworkStageSummary summary;

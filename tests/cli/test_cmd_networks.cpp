@@ -92,6 +92,12 @@ TEST_F(NetworkCommands, BadInputsAreNamedAndWriteNothing) {
   r = run_cli("normals " + (*dir / "empty_models").string() + " -o " + out.string() + models(), *dir / "b4.log");
   EXPECT_EQ(r.status, 1 << 8) << r.output;
   EXPECT_NE(r.output.find("front_rgb.png"), std::string::npos) << r.output;
+  // An output the image writer cannot write is refused before the network runs.
+  r = run_cli("upscale " + (*dir / "photo.png").string() + " -o " + (*dir / "x4.txt").string() + models(),
+              *dir / "b5.log");
+  EXPECT_EQ(r.status, 1 << 8) << r.output;
+  EXPECT_NE(r.output.find("x4.txt"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("upscaling"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(out));
 }
 
