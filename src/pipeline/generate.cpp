@@ -13,6 +13,7 @@
 #include "nn/preprocess/pil_resize.h"
 #include "pipeline/image_stages.h"
 #include "pipeline/model_folder.h"
+#include "pipeline/tensor_image.h"
 
 namespace u3d {
 namespace {
@@ -94,11 +95,7 @@ bool opaque(const Image& rgba) {
 }
 
 Image lanczos_resize(const Image& rgb, int size) {
-  const torch::Tensor resized = nn::pil_resize(nn::image_to_uint8_rgb(rgb), size, size, nn::PilFilter::Lanczos);
-  const torch::Tensor f = resized.to(torch::kFloat).div(255).contiguous();
-  Image out(size, size, 3);
-  std::memcpy(out.data.data(), f.data_ptr<float>(), out.data.size() * sizeof(float));
-  return out;
+  return tensor_to_image(nn::pil_resize(nn::image_to_uint8_rgb(rgb), size, size, nn::PilFilter::Lanczos));
 }
 
 std::array<std::string, 4> view_names(bool normal) {

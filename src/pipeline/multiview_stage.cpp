@@ -7,19 +7,9 @@
 #include "nn/pipelines/unique3d_multiview.h"
 #include "nn/preprocess/pil_resize.h"
 #include "pipeline/model_folder.h"
+#include "pipeline/tensor_image.h"
 
 namespace u3d {
-namespace {
-
-Image tensor_to_rgb(const torch::Tensor& hwc) {
-  const torch::Tensor t = hwc.to(torch::kFloat).clamp(0, 1).contiguous();
-  Image image(int(t.size(1)), int(t.size(0)), 3);
-  std::memcpy(image.data.data(), t.data_ptr<float>(), image.data.size() * sizeof(float));
-  return image;
-}
-
-}  // namespace
-
 std::array<Image, 4> run_multiview_stage(const Image& front, const NetworkOptions& network,
                                          const MultiViewOptions& options, NetworkStageSummary& summary) {
   const ModelFolder folder(network.models);
@@ -39,7 +29,7 @@ std::array<Image, 4> run_multiview_stage(const Image& front, const NetworkOption
   summary.timings.push_back({"multi-view", timer.finish()});
   summary.peak_memory_mib = peak_memory_mib();
   std::array<Image, 4> out;
-  for (View v : kAllViews) out[size_t(v)] = tensor_to_rgb(views[int(v)]);
+  for (View v : kAllViews) out[size_t(v)] = tensor_to_image(views[int(v)]);
   return out;
 }
 
