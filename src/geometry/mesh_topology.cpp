@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <map>
+#include <tuple>
 
 #include "core/error.h"
 #include "geometry/disjoint_sets.h"
@@ -62,6 +64,21 @@ MeshTopology mesh_topology(const Mesh& mesh) {
                     mesh.positions[f[1]].cast<double>().cross(mesh.positions[f[2]].cast<double>())) /
                 6.0;
   return t;
+}
+
+MeshTopology surface_topology(const Mesh& mesh) {
+  std::map<std::tuple<float, float, float>, int> index;
+  Mesh welded;
+  std::vector<int> remap(mesh.positions.size());
+  for (size_t v = 0; v < mesh.positions.size(); ++v) {
+    const Vec3f& p = mesh.positions[v];
+    auto [it, added] = index.emplace(std::make_tuple(p.x(), p.y(), p.z()), int(welded.positions.size()));
+    if (added) welded.positions.push_back(p);
+    remap[v] = it->second;
+  }
+  welded.faces.reserve(mesh.faces.size());
+  for (const Vec3i& f : mesh.faces) welded.faces.emplace_back(remap[f[0]], remap[f[1]], remap[f[2]]);
+  return mesh_topology(welded);
 }
 
 }  // namespace u3d

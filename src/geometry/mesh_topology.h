@@ -22,6 +22,10 @@ struct MeshTopology {
 
 MeshTopology mesh_topology(const Mesh& mesh);
 
+// The same for the surface a textured mesh describes: vertices at identical positions (the copies a
+// UV seam makes) count as one.
+MeshTopology surface_topology(const Mesh& mesh);
+
 // Per vertex, how many fans its faces form (0 when no face uses it): two faces at a vertex are in one
 // fan when a chain of faces joins them, each traversing an edge at the vertex opposite to the next.
 std::vector<int> vertex_fan_counts(const std::vector<Vec3i>& faces, const EdgeTopology& topology,

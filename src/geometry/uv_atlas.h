@@ -1,0 +1,47 @@
+#pragma once
+// A UV atlas for a closed mesh coloured from axis-aligned orthographic views: axis-aligned charts.
+//
+// Each face is assigned to the one of six axis directions its normal faces most (+Z front, +X right,
+// -Z back, -X left: the four views; +Y top, -Y bottom, which no view sees head-on but which would
+// be crushed in a side projection); labels are then smoothed (a face takes the label two or three of
+// its neighbours share when it still faces that axis by more than `min_axis_cos`), which removes
+// most single-face islands. Charts are the edge-connected pieces of one label, each projected
+// orthographically onto its axis plane, seen from outside (so faces keep their counter-clockwise
+// winding in UV and no face flips). A chart whose projection overlaps itself (a surface that folds
+// over while still facing the axis) is split at the median depth along the axis until no texel
+// centre is covered twice. The charts are packed into the square atlas by shelf packing (tallest
+// first, a chart is turned a quarter when that makes it wider than tall) at the largest common
+// scale that fits, with `gutter_texels` empty texels around every chart so bilinear lookups and
+// mipmaps of a dilated texture do not bleed between charts.
+//
+// Compared with Open3D's UVAtlas (docs/file_formats.md, "Textures"): about 100x faster on 40k faces
+// and never rejects a mesh, at more seams (the chart borders) and a lower but comparable texel
+// efficiency.
+#include <vector>
+
+#include "core/mesh.h"
+
+namespace u3d {
+
+struct UvAtlasOptions {
+  int texture_size = 2048;    // texels per side of the square atlas
+  int gutter_texels = 4;      // empty texels around each chart
+  float min_axis_cos = 0.3f;  // smoothing never gives a face an axis it faces less than this
+};
+
+struct UvAtlas {
+  // The input geometry with a vertex per (input vertex, chart) pair, so every vertex has one UV
+  // (mesh UV convention, (0,0) = bottom-left of the texture). Vertex colours travel; materials do not.
+  Mesh mesh;
+  std::vector<int> source_vertex;  // per atlas vertex, the input vertex it copies
+  std::vector<int> face_chart;     // per face (same order as the input), its chart
+  int chart_count = 0;
+  float texels_per_unit = 0.f;    // the packing scale: atlas texels per world unit
+  float texel_efficiency = 0.f;   // share of the atlas's texels the charts' triangles cover
+};
+
+// Throws Error for an empty mesh or options out of range (texture_size < 16, gutter < 0, or a
+// texture too small for the gutters of all charts).
+UvAtlas axis_chart_atlas(const Mesh& mesh, const UvAtlasOptions& options = {});
+
+}  // namespace u3d
