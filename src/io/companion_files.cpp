@@ -16,13 +16,14 @@ void CompanionFiles::write(const fs::path& path, const std::function<void(const 
   written_.push_back(path);
 }
 
-void CompanionFiles::write_png(const Image& image, const fs::path& path) {
+void CompanionFiles::write_image(const Image& image, const fs::path& path) {
   save_image(image, path);
   written_.push_back(path);
 }
 
-fs::path texture_path_for(const fs::path& mesh_path, int index, bool several) {
-  std::string name = mesh_path.stem().string() + "_texture" + (several ? std::to_string(index) : "") + ".png";
+fs::path texture_path_for(const fs::path& mesh_path, int index, bool several, TextureFormat format) {
+  std::string name =
+      mesh_path.stem().string() + "_texture" + (several ? std::to_string(index) : "") + texture_extension(format);
   return mesh_path.parent_path() / name;
 }
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/image.h"
+#include "io/image_codec.h"
 
 namespace u3d {
 
@@ -18,16 +19,16 @@ class CompanionFiles {
   ~CompanionFiles();  // removes everything written unless commit() was called
 
   void write(const std::filesystem::path& path, const std::function<void(const std::filesystem::path& tmp)>& writer);
-  void write_png(const Image& image, const std::filesystem::path& path);
+  void write_image(const Image& image, const std::filesystem::path& path);  // PNG or JPEG by extension
   void commit() { written_.clear(); }
 
  private:
   std::vector<std::filesystem::path> written_;
 };
 
-// Name of the texture file of material `index` next to a mesh file: model_texture.png, or
-// model_texture0.png, model_texture1.png, ...
-// when several materials have textures.
-std::filesystem::path texture_path_for(const std::filesystem::path& mesh_path, int index, bool several);
+// Name of the texture file of material `index` next to a mesh file: model_texture.png (or .jpg), or
+// model_texture0.png, model_texture1.png, ... when several materials have textures.
+std::filesystem::path texture_path_for(const std::filesystem::path& mesh_path, int index, bool several,
+                                       TextureFormat format = TextureFormat::Png);
 
 }  // namespace u3d

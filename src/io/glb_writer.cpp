@@ -2,7 +2,7 @@
 // sharing the vertex attributes: POSITION (with min/max), NORMAL (area-weighted), COLOR_0 (float vec3,
 // LINEAR as glTF requires: our sRGB colours go through the sRGB EOTF), TEXCOORD_0 (v flipped: glTF's
 // (0,0) is the top-left of the image) and uint32 indices. Materials are PBR metallic-roughness with
-// metallic 0 and roughness 1, baseColorFactor linear, baseColorTexture an embedded PNG.
+// metallic 0 and roughness 1, baseColorFactor linear, baseColorTexture an embedded PNG (or JPEG).
 #include <algorithm>
 #include <cstring>
 #include <fstream>
@@ -53,8 +53,8 @@ class GlbBuilder {
     return int(accessors_.size()) - 1;
   }
 
-  int add_image(const std::vector<unsigned char>& png) {
-    images_.push_back({{"bufferView", add_view(png.data(), png.size(), 0)}, {"mimeType", "image/png"}});
+  int add_image(const std::vector<unsigned char>& bytes, TextureFormat format) {
+    images_.push_back({{"bufferView", add_view(bytes.data(), bytes.size(), 0)}, {"mimeType", texture_mime_type(format)}});
     return int(images_.size()) - 1;
   }
 
@@ -123,7 +123,7 @@ json material_json(const Material& material, int texture) {
   return out;
 }
 
-std::string glb_bytes(const Mesh& mesh) {
+std::string glb_bytes(const Mesh& mesh, TextureFormat texture_format) {
   GlbBuilder builder;
   json attributes = {{"POSITION", builder.add_float_accessor<3>(mesh.positions, "VEC3", true)},
                      {"NORMAL", builder.add_float_accessor<3>(unit_normals(mesh), "VEC3", false)}};
@@ -155,7 +155,8 @@ std::string glb_bytes(const Mesh& mesh) {
     int texture = -1;
     Material material = m < mesh.materials.size() ? mesh.materials[m] : Material{};
     if (!material.texture.empty() && mesh.has_uvs()) {
-      int image = builder.add_image(encode_png(material.texture, "texture of material '" + material.name + "'"));
+      int image = builder.add_image(
+          encode_image(material.texture, texture_format, "texture of material '" + material.name + "'"), texture_format);
       textures.push_back({{"sampler", 0}, {"source", image}});
       texture = int(textures.size()) - 1;
     }
@@ -176,8 +177,8 @@ std::string glb_bytes(const Mesh& mesh) {
 
 }  // namespace
 
-void write_glb(const Mesh& mesh, const fs::path& path) {
-  std::string bytes = glb_bytes(mesh);
+void write_glb(const Mesh& mesh, const fs::path& path, TextureFormat texture_format) {
+  std::string bytes = glb_bytes(mesh, texture_format);
   write_atomically(path, [&](const fs::path& tmp) {
     std::ofstream out(tmp, std::ios::binary);
     out.write(bytes.data(), std::streamsize(bytes.size()));

@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include "core/mesh.h"
+#include "io/image_codec.h"
 
 namespace u3d {
 
@@ -11,8 +12,9 @@ Mesh read_obj(const std::filesystem::path& path);
 Mesh read_ply(const std::filesystem::path& path);
 Mesh read_gltf(const std::filesystem::path& path);  // .glb and .gltf
 
-void write_obj(const Mesh& mesh, const std::filesystem::path& path);
-void write_ply(const Mesh& mesh, const std::filesystem::path& path);
-void write_glb(const Mesh& mesh, const std::filesystem::path& path);
+// Textures go out as `texture_format` (PNG or JPEG), embedded (GLB) or as files beside the mesh.
+void write_obj(const Mesh& mesh, const std::filesystem::path& path, TextureFormat texture_format = TextureFormat::Png);
+void write_ply(const Mesh& mesh, const std::filesystem::path& path, TextureFormat texture_format = TextureFormat::Png);
+void write_glb(const Mesh& mesh, const std::filesystem::path& path, TextureFormat texture_format = TextureFormat::Png);
 
 }  // namespace u3d

@@ -33,15 +33,15 @@ Mesh read_mesh(const fs::path& path) {
   return mesh;
 }
 
-void write_mesh(const Mesh& mesh, const fs::path& path) {
+void write_mesh(const Mesh& mesh, const fs::path& path, const MeshWriteOptions& options) {
   const std::string file = path.string();
   std::string ext = lowercase_extension(path);
   require(ext == ".obj" || ext == ".ply" || ext == ".glb",
           "unsupported output mesh extension '" + ext + "' (use .glb, .obj or .ply): " + file);
   mesh.validate("cannot write " + file);
-  if (ext == ".glb") write_glb(mesh, path);
-  else if (ext == ".obj") write_obj(mesh, path);
-  else write_ply(mesh, path);
+  if (ext == ".glb") write_glb(mesh, path, options.texture_format);
+  else if (ext == ".obj") write_obj(mesh, path, options.texture_format);
+  else write_ply(mesh, path, options.texture_format);
 }
 
 }  // namespace u3d

@@ -6,10 +6,15 @@
 #include <filesystem>
 
 #include "core/mesh.h"
+#include "io/image_codec.h"
 
 namespace u3d {
 
+struct MeshWriteOptions {
+  TextureFormat texture_format = TextureFormat::Png;  // textures embedded in a GLB or written beside the file
+};
+
 Mesh read_mesh(const std::filesystem::path& path);
-void write_mesh(const Mesh& mesh, const std::filesystem::path& path);
+void write_mesh(const Mesh& mesh, const std::filesystem::path& path, const MeshWriteOptions& options = {});
 
 }  // namespace u3d

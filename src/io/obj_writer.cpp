@@ -1,4 +1,4 @@
-// Wavefront OBJ writer: model.obj + model.mtl (when the mesh has materials) + one PNG per textured
+// Wavefront OBJ writer: model.obj + model.mtl (when the mesh has materials) + one PNG (or JPEG) per textured
 // material. Vertex colours use the "v x y z r g b" extension; UVs are written per vertex (vt i == v i).
 #include <fstream>
 #include <set>
@@ -98,19 +98,19 @@ std::string obj_text(const Mesh& mesh, const fs::path& mtl_path, const std::vect
 
 }  // namespace
 
-void write_obj(const Mesh& mesh, const fs::path& path) {
+void write_obj(const Mesh& mesh, const fs::path& path, TextureFormat texture_format) {
   std::vector<std::string> names = unique_material_names(mesh.materials);
   int textured = 0;
   for (const auto& m : mesh.materials) textured += !m.texture.empty() && mesh.has_uvs();
   std::vector<fs::path> textures(mesh.materials.size());
   for (size_t i = 0; i < mesh.materials.size(); ++i)
-    if (!mesh.materials[i].texture.empty() && mesh.has_uvs()) textures[i] = texture_path_for(path, int(i), textured > 1);
+    if (!mesh.materials[i].texture.empty() && mesh.has_uvs()) textures[i] = texture_path_for(path, int(i), textured > 1, texture_format);
   fs::path mtl_path = mesh.materials.empty() ? fs::path() : fs::path(path).replace_extension(".mtl");
 
   // Companions first, the .obj last: a reader never sees an .obj whose files are missing.
   CompanionFiles files;
   for (size_t i = 0; i < textures.size(); ++i)
-    if (!textures[i].empty()) files.write_png(mesh.materials[i].texture, textures[i]);
+    if (!textures[i].empty()) files.write_image(mesh.materials[i].texture, textures[i]);
   if (!mtl_path.empty())
     files.write(mtl_path, [&](const fs::path& tmp) { write_text(tmp, mtl_text(mesh, names, textures)); });
   files.write(path, [&](const fs::path& tmp) { write_text(tmp, obj_text(mesh, mtl_path, names)); });

@@ -1,5 +1,5 @@
 // Binary little-endian PLY writer: float positions, uchar colours, float s/t UVs and int triangle
-// lists. PLY has no materials: the first material's texture is written next to it as a PNG and named
+// lists. PLY has no materials: the first material's texture is written next to it as a PNG (or JPEG) and named
 // in a "comment TextureFile" line (MeshLab's convention).
 #include <algorithm>
 #include <bit>
@@ -53,7 +53,7 @@ std::string ply_bytes(const Mesh& mesh, const fs::path& texture) {
 
 }  // namespace
 
-void write_ply(const Mesh& mesh, const fs::path& path) {
+void write_ply(const Mesh& mesh, const fs::path& path, TextureFormat texture_format) {
   const Material* textured = nullptr;
   if (mesh.has_uvs())
     for (const auto& m : mesh.materials)
@@ -61,10 +61,10 @@ void write_ply(const Mesh& mesh, const fs::path& path) {
         textured = &m;
         break;
       }
-  fs::path texture = textured ? texture_path_for(path, 0, false) : fs::path();
+  fs::path texture = textured ? texture_path_for(path, 0, false, texture_format) : fs::path();
 
   CompanionFiles files;
-  if (textured) files.write_png(textured->texture, texture);
+  if (textured) files.write_image(textured->texture, texture);
   files.write(path, [&](const fs::path& tmp) {
     std::string bytes = ply_bytes(mesh, texture);
     std::ofstream out(tmp, std::ios::binary);
