@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/command.h"
+#include "cli/mesh_output_options.h"
 #include "cli/network_options.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -19,6 +20,7 @@ struct GenerateArgs {
   bool no_refine = false;
   int steps = 0;  // 0: each stage's own
   std::string json_path;
+  MeshOutputArgs output;
 };
 
 nlohmann::json summary_json(const GenerateSummary& s) {
@@ -42,6 +44,7 @@ void run(const GenerateArgs& a) {
   request.network = a.network.resolved();
   request.refine = !a.no_refine;
   if (a.steps > 0) request.multiview.steps = request.normals.steps = a.steps;
+  apply_mesh_output_options(a.output, request.reconstruct, request.texture_format);
   const GenerateSummary s = generate(request);
   const ReconstructSummary& r = s.reconstruction;
   std::printf("mesh: %zu vertices, %zu faces, %s -> %s\n", r.mesh.vertex_count(), r.mesh.face_count(),
@@ -55,6 +58,7 @@ void run(const GenerateArgs& a) {
                   stage.peak_memory_mib);
   }
   std::printf("  %-12s %8.1f s\n", "total", s.total_seconds());
+  print_texture_summary(request.reconstruct, r);
   if (!a.json_path.empty())
     write_atomically(a.json_path, [&](const std::filesystem::path& tmp) {
       std::ofstream f(tmp);
@@ -85,6 +89,7 @@ const CommandRegistration registration{
       sub.add_flag("--official-scale", r.official_output_scale,
                    "Scale the output by 0.675 like the official release (default: the views' frame, unscaled)");
       sub.add_option("--json", a->json_path, "Also write the summary (stages, times, memory, files) to this JSON file");
+      add_mesh_output_options(sub, a->output, r.reconstruct);
       return [a] { run(*a); };
     }};
 

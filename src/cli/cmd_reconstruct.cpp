@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "cli/command.h"
+#include "cli/mesh_output_options.h"
 #include "core/view_set.h"
 #include "pipeline/reconstruct.h"
 
@@ -16,6 +17,7 @@ struct ReconstructArgs {
   bool no_explicit_target = false;
   int coarse_steps = -1;  // -1: the schedule's own
   int refine_steps = -1;
+  MeshOutputArgs output;
   ReconstructRequest request;
 };
 
@@ -30,15 +32,18 @@ ReconstructRequest make_request(const ReconstructArgs& args) {
   if (args.refine_steps >= 0) o.refine.steps = args.refine_steps;
   o.refine.use_explicit_target = !args.no_explicit_target;
   o.run_coarse = o.run_refine = !args.init_only && !o.visual_hull;
+  apply_mesh_output_options(args.output, o, r.texture_format);
   return r;
 }
 
 void run(const ReconstructArgs& args) {
-  const ReconstructSummary s = reconstruct_folder(make_request(args));
+  const ReconstructRequest request = make_request(args);
+  const ReconstructSummary s = reconstruct_folder(request);
   std::printf("mesh: %zu vertices, %zu faces, %s\n", s.mesh.vertex_count(), s.mesh.face_count(),
               s.topology.summary().c_str());
   std::printf("colouring: %zu vertices from the views, %zu completed, %zu unreachable\n", s.coloring.confident,
               s.coloring.completed, s.coloring.unreachable);
+  print_texture_summary(request.options, s);
   const std::array<float, 4>& iou = s.silhouette_iou;
   std::printf("silhouette IoU: front %.4f, right %.4f, back %.4f, left %.4f\n", iou[0], iou[1], iou[2], iou[3]);
   std::printf("time:");
@@ -118,6 +123,7 @@ const CommandRegistration registration{
                      "Raster resolution of the colouring visibility test")
           ->capture_default_str()
           ->check(CLI::Range(16, 8192));
+      add_mesh_output_options(sub, args->output, o);
       return [args] { run(*args); };
     }};
 

@@ -5,6 +5,7 @@
 
 #include "core/error.h"
 #include "core/progress.h"
+#include "geometry/quadric_decimation.h"
 
 namespace u3d {
 
@@ -12,6 +13,11 @@ Mesh stage_initial_mesh(const ViewSet& views, const ReconstructOptions& options)
   if (options.visual_hull) return carve_visual_hull(views, options.hull);
   if (options.sphere_init) return sphere_initial_mesh();
   return build_initial_mesh(views, options.init);
+}
+
+size_t final_face_count(const ReconstructOptions& options) {
+  if (options.faces > 0) return options.faces;
+  return options.color_mode == ColorMode::Texture ? kDefaultTextureFaces : 0;
 }
 
 ReconstructResult reconstruct(const ViewSet& views, const ReconstructOptions& options) {
@@ -46,7 +52,21 @@ ReconstructResult reconstruct(const ViewSet& views, const ReconstructOptions& op
       });
   }
   timed("smooth and subdivide", [&] { mesh = smooth_and_subdivide(mesh, options.cleanup); });
-  timed("colouring", [&] { result.coloring = color_mesh(mesh, views, options.coloring); });
+  const size_t faces = final_face_count(options);
+  if (faces > 0 && mesh.faces.size() > faces)
+    timed("decimate", [&] {
+      mesh = decimate_closed_mesh(mesh, faces);
+      if (mesh.faces.size() > faces + faces / 100)
+        progress("warning: decimation stopped at " + std::to_string(mesh.faces.size()) + " faces (asked for " +
+                 std::to_string(faces) + ")");
+    });
+  if (options.color_mode == ColorMode::Texture)
+    timed("texture", [&] {
+      result.texture = bake_texture(mesh, views, options.coloring, options.texture);
+      result.coloring = result.texture.vertices;
+    });
+  else
+    timed("colouring", [&] { result.coloring = color_mesh(mesh, views, options.coloring); });
   mesh.validate("reconstructed mesh");
   result.mesh = std::move(mesh);
   return result;

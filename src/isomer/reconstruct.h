@@ -5,7 +5,9 @@
 //   2. coarse optimisation     (coarse_stage.h: fit normals and masks at 512 px)
 //   3. refinement              (refine_stage.h: ExplicitTarget normals, rendered at up to 512 px)
 //   4. smooth and subdivide    (surface_cleanup.h)
-//   5. colouring               (explicit_target.h: ExplicitTarget + completion)
+//   5. decimation to a face count (geometry/quadric_decimation.h; only when asked, or for textures)
+//   6. colouring               (explicit_target.h: ExplicitTarget + completion, per vertex), or
+//      texture baking          (texture_bake.h: UV atlas, the same colouring per texel)
 // Each stage is a function of the mesh so far; reconstruct() runs them in order and times each. The
 // result is in the views' world frame; the official release's output scale is applied when writing
 // (pipeline/reconstruct.h).
@@ -20,7 +22,7 @@
 #include "isomer/normal_views.h"
 #include "isomer/refine_stage.h"
 #include "isomer/surface_cleanup.h"
-#include "core/view_set.h"
+#include "isomer/texture_bake.h"
 #include "isomer/visual_hull.h"
 
 namespace u3d {
@@ -28,6 +30,12 @@ namespace u3d {
 // Longest side of the normal maps the coarse stage receives (official: 512); the stage may render
 // lower still (CoarseStageOptions::render_resolution).
 inline constexpr int kCoarseMapResolution = 512;
+
+// How the colour is stored: per vertex, or in a baked texture with UVs.
+enum class ColorMode { Vertex, Texture };
+
+// Face count of a textured result when none is asked for (as Hunyuan3D-2's face reducer).
+inline constexpr size_t kDefaultTextureFaces = 40000;
 
 struct ReconstructOptions {
   InitialMeshOptions init;
@@ -39,8 +47,16 @@ struct ReconstructOptions {
   CoarseStageOptions coarse;  // with sphere_init, CoarseStageOptions::from_sphere() is the official schedule
   RefineStageOptions refine;  // refine.use_explicit_target = false: plain multi-view normal loss
   SurfaceCleanupOptions cleanup;
-  ColoringOptions coloring;
+  // Final face count: the cleaned-up mesh is decimated to it (quadric, staying closed and manifold)
+  // when it has more. 0: kDefaultTextureFaces with ColorMode::Texture, no decimation with vertex colours.
+  size_t faces = 0;
+  ColorMode color_mode = ColorMode::Vertex;
+  ColoringOptions coloring;  // weights, masks and threshold of both modes
+  TextureBakeOptions texture;
 };
+
+// The face count `options` ask for after the clean-up (0: keep the mesh as it is).
+size_t final_face_count(const ReconstructOptions& options);
 
 struct StageTiming {
   std::string name;
@@ -52,6 +68,7 @@ struct ReconstructResult {
   std::vector<StageTiming> timings;
   StageReport coarse, refine;  // the optimisation stages' loss and time profile (when they ran)
   ColoringReport coloring;
+  TextureBakeReport texture;  // with ColorMode::Texture
 };
 
 // Stage 1: the initial mesh, the sphere or the visual hull, as the options choose.

@@ -210,6 +210,7 @@ struct Run {
         r.output = request.output;
         r.options = request.reconstruct;
         r.official_output_scale = request.official_output_scale;
+        r.texture_format = request.texture_format;
         summary.reconstruction = reconstruct_view_set(*view_set, r);
         report(stage, summary.reconstruction.total_seconds(), false);
         summary.written.insert(summary.written.end(), summary.reconstruction.written.begin(),

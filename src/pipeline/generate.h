@@ -38,6 +38,7 @@ struct GenerateRequest {
   NormalOptions normals;
   ReconstructOptions reconstruct;
   bool official_output_scale = false;  // as ReconstructRequest
+  TextureFormat texture_format = TextureFormat::Png;  // as ReconstructRequest
 };
 
 struct GenerateStageReport {

@@ -61,7 +61,8 @@ ReconstructSummary reconstruct_view_set(const ViewSet& views, const ReconstructR
   summary.timings.insert(summary.timings.end(), result.timings.begin(), result.timings.end());
   summary.mesh = std::move(result.mesh);
   summary.coloring = result.coloring;
-  summary.topology = mesh_topology(summary.mesh);
+  summary.texture = result.texture;
+  summary.topology = surface_topology(summary.mesh);
   summary.silhouette_iou = silhouette_iou(summary.mesh, views);
 
   // Previews are rendered before anything is written, so a failure leaves no partial set of outputs.
@@ -77,9 +78,9 @@ ReconstructSummary reconstruct_view_set(const ViewSet& views, const ReconstructR
   if (request.official_output_scale) {
     Mesh scaled = summary.mesh;
     for (Vec3f& p : scaled.positions) p *= kOfficialOutputScale;
-    write_mesh(scaled, out);
+    write_mesh(scaled, out, {request.texture_format});
   } else {
-    write_mesh(summary.mesh, out);
+    write_mesh(summary.mesh, out, {request.texture_format});
   }
   summary.written.push_back(out);
   if (previews) {

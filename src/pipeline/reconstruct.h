@@ -11,6 +11,7 @@
 #include "core/progress.h"
 #include "core/view_set.h"
 #include "geometry/mesh_topology.h"
+#include "io/image_codec.h"
 #include "isomer/reconstruct.h"
 
 namespace u3d {
@@ -24,13 +25,15 @@ struct ReconstructRequest {
   std::filesystem::path output;        // .glb, .obj or .ply
   bool previews = false;               // also <stem>_views.png (the four views) and <stem>_turntable.png
   bool official_output_scale = false;  // write the mesh scaled by kOfficialOutputScale
+  TextureFormat texture_format = TextureFormat::Png;  // of the baked texture (options.color_mode Texture)
   ReconstructOptions options;
 };
 
 struct ReconstructSummary {
   Mesh mesh;  // as reconstructed, in the views' frame (the file may be scaled)
-  MeshTopology topology;
+  MeshTopology topology;  // of the surface (UV seams are not borders)
   ColoringReport coloring;
+  TextureBakeReport texture;              // with ColorMode::Texture
   std::array<float, 4> silhouette_iou{};  // per view, against the input masks
   std::vector<StageTiming> timings;       // "load", ISOMER's stages, "write", "previews" (if written)
   std::vector<std::filesystem::path> written;

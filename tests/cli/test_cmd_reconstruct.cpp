@@ -7,6 +7,8 @@
 #include <fstream>
 #include <regex>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 #include "geometry/mesh_topology.h"
 #include "io/mesh_io.h"
@@ -157,6 +159,65 @@ TEST(ReconstructCli, BadInputFailsCleanlyAndWritesNothing) {
     save_image(good[View::Front].rgb, d / "front.jpg");
     std::filesystem::rename(d / "front.jpg", d / "front_rgb.png");
   }, "not a PNG");
+}
+
+// --faces hits its count within 1 % and keeps the surface closed and manifold, with vertex colours
+// and with a texture; textures go into the GLB or beside an OBJ (PNG or JPEG).
+TEST(ReconstructCli, FacesAndTextureOptionsShapeTheOutput) {
+  const auto dir = testing::fresh_temp_dir("cli_texture");
+  testing::write_view_set(testing::sphere_views(0.6f, 128), dir / "views");
+  const std::string views = (dir / "views").string() + " --coarse-steps 20 --refine-steps 5";
+  auto expect_faces = [](const Mesh& mesh, size_t faces) {
+    EXPECT_LE(mesh.face_count(), faces);
+    EXPECT_GE(mesh.face_count(), faces - faces / 100);
+    EXPECT_TRUE(surface_topology(mesh).closed_manifold()) << surface_topology(mesh).summary();
+  };
+  const CliResult vertex = run_cli(views + " -o " + (dir / "v.glb").string() + " --faces 3000", dir / "v.txt");
+  ASSERT_EQ(vertex.status, 0) << vertex.output;
+  EXPECT_NE(vertex.output.find(", decimate "), std::string::npos) << vertex.output;
+  const Mesh v = read_mesh(dir / "v.glb");
+  EXPECT_TRUE(v.has_colors());
+  EXPECT_FALSE(v.has_texture());
+  expect_faces(v, 3000);
+
+  const CliResult texture = run_cli(views + " -o " + (dir / "t.glb").string() +
+                                        " --colour texture --faces 2000 --texture-size 256", dir / "t.txt");
+  ASSERT_EQ(texture.status, 0) << texture.output;
+  EXPECT_NE(texture.output.find("texture: 256x256, "), std::string::npos) << texture.output;
+  const Mesh t = read_mesh(dir / "t.glb");
+  ASSERT_TRUE(t.has_texture());
+  EXPECT_FALSE(t.has_colors());
+  EXPECT_EQ(t.materials[0].texture.width, 256);
+  expect_faces(t, 2000);
+
+  const CliResult obj = run_cli(views + " -o " + (dir / "t.obj").string() +
+                                    " --colour texture --faces 2000 --texture-size 128 --texture-format jpg",
+                                dir / "obj.txt");
+  ASSERT_EQ(obj.status, 0) << obj.output;
+  EXPECT_TRUE(std::filesystem::exists(dir / "t.mtl"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "t_texture.jpg"));
+  EXPECT_TRUE(read_mesh(dir / "t.obj").has_texture());
+}
+
+TEST(ReconstructCli, BadFaceAndTextureOptionsFailBeforeWork) {
+  const auto dir = testing::fresh_temp_dir("cli_texture_bad");
+  testing::write_view_set(testing::sphere_views(0.6f, 64), dir / "views");
+  const std::string head = (dir / "views").string() + " -o " + (dir / "out.glb").string() + " ";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"--colour paint", "--colour"},
+      {"--faces 10", "--faces"},
+      {"--colour texture --texture-size 16", "--texture-size"},
+      {"--colour texture --texture-format gif", "--texture-format"},
+      {"--texture-size 512", "--texture-size needs --colour texture"},
+      {"--texture-format jpg", "--texture-format needs --colour texture"},
+  };
+  for (const auto& [args, expected] : cases) {
+    const CliResult r = run_cli(head + args, dir / "log.txt");
+    EXPECT_NE(r.status, 0) << args;
+    EXPECT_NE(r.output.find(expected), std::string::npos) << args << ": " << r.output;
+    EXPECT_EQ(r.output.find("time:"), std::string::npos) << args << ": " << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "out.glb")) << args;
+  }
 }
 
 TEST(ReconstructCli, RejectsUnknownOutputFormatBeforeWork) {
