@@ -189,6 +189,8 @@ TEST(ReconstructCli, FacesAndTextureOptionsShapeTheOutput) {
   EXPECT_FALSE(t.has_colors());
   EXPECT_EQ(t.materials[0].texture.width, 256);
   expect_faces(t, 2000);
+  if (std::system("command -v node > /dev/null 2>&1") == 0)  // the Khronos glTF validator (tests/io too)
+    EXPECT_EQ(std::system(("node " UNIQUE3D_SOURCE_DIR "/tools/validate_gltf.mjs " + (dir / "t.glb").string()).c_str()), 0);
 
   const CliResult obj = run_cli(views + " -o " + (dir / "t.obj").string() +
                                     " --colour texture --faces 2000 --texture-size 128 --texture-format jpg",

@@ -33,6 +33,8 @@ TEST(GltfValidator, WrittenGlbFilesHaveNoErrors) {
 
   write_mesh(two_material_quads(), dir / "textured.glb");
   EXPECT_EQ(validate(dir / "textured.glb"), 0);
+  write_mesh(two_material_quads(), dir / "textured_jpeg.glb", {TextureFormat::Jpeg});
+  EXPECT_EQ(validate(dir / "textured_jpeg.glb"), 0);
 
   // Colours + UVs + an RGBA texture + a translucent untextured material + an isolated vertex (whose
   // normal is undefined) + a degenerate face.
