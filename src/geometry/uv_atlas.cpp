@@ -182,6 +182,42 @@ UvAtlas axis_chart_atlas(const Mesh& mesh, const UvAtlasOptions& options) {
     }
     label.swap(next);
   }
+  // Small islands (fewer than min_chart_faces) join the neighbouring label they share most edges
+  // with, when all their faces face that axis by more than min_axis_cos.
+  for (int round = 0; round < 3; ++round) {
+    DisjointSets sets(nf);
+    for (size_t f = 0; f < nf; ++f)
+      for (int n : neighbours[f])
+        if (n >= 0 && label[n] == label[f]) sets.unite(int(f), n);
+    std::vector<int> island_size(nf, 0);
+    for (size_t f = 0; f < nf; ++f) ++island_size[sets.find(int(f))];
+    std::vector<std::array<int, 6>> border_edges(nf, std::array<int, 6>{});  // per island root, per label
+    for (size_t f = 0; f < nf; ++f) {
+      const int root = sets.find(int(f));
+      if (island_size[root] >= options.min_chart_faces) continue;
+      for (int n : neighbours[f])
+        if (n >= 0 && label[n] != label[f]) ++border_edges[root][label[n]];
+    }
+    std::vector<int> target(nf, -1);  // per island root, the label it joins
+    for (size_t f = 0; f < nf; ++f) {
+      const int root = sets.find(int(f));
+      if (int(f) != root || island_size[root] >= options.min_chart_faces) continue;
+      const auto& counts = border_edges[root];
+      const int best = int(std::max_element(counts.begin(), counts.end()) - counts.begin());
+      if (counts[best] > 0) target[root] = best;
+    }
+    std::vector<uint8_t> allowed(nf, 1);
+    for (size_t f = 0; f < nf; ++f) {
+      const int root = sets.find(int(f));
+      if (target[root] >= 0 && normals[f].dot(kAxes[target[root]].dir) <= options.min_axis_cos) allowed[root] = 0;
+    }
+    bool changed = false;
+    for (size_t f = 0; f < nf; ++f) {
+      const int root = sets.find(int(f));
+      if (target[root] >= 0 && allowed[root]) label[f] = target[root], changed = true;
+    }
+    if (!changed) break;
+  }
 
   // Charts: connected pieces of each label, split while they overlap themselves.
   std::vector<int> slot(nf, -1);

@@ -4,8 +4,9 @@
 // Each face is assigned to the one of six axis directions its normal faces most (+Z front, +X right,
 // -Z back, -X left: the four views; +Y top, -Y bottom, which no view sees head-on but which would
 // be crushed in a side projection); labels are then smoothed (a face takes the label two or three of
-// its neighbours share when it still faces that axis by more than `min_axis_cos`), which removes
-// most single-face islands. Charts are the edge-connected pieces of one label, each projected
+// its neighbours share when it still faces that axis by more than `min_axis_cos`), and islands of
+// fewer than `min_chart_faces` faces join the neighbouring label they share most edges with, when
+// all their faces face its axis by more than `min_axis_cos`. Charts are the edge-connected pieces of one label, each projected
 // orthographically onto its axis plane, seen from outside (so faces keep their counter-clockwise
 // winding in UV and no face flips). A chart whose projection overlaps itself (a surface that folds
 // over while still facing the axis) is split at the median depth along the axis until no texel
@@ -27,6 +28,7 @@ struct UvAtlasOptions {
   int texture_size = 2048;    // texels per side of the square atlas
   int gutter_texels = 4;      // empty texels around each chart
   float min_axis_cos = 0.3f;  // smoothing never gives a face an axis it faces less than this
+  int min_chart_faces = 50;   // smaller islands join a neighbouring chart (if min_axis_cos allows)
 };
 
 struct UvAtlas {
