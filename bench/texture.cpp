@@ -1,14 +1,9 @@
 // UV atlas and texture baking at the sizes `reconstruct --colour texture` uses by default: the bundled
 // spot, subdivided and decimated to 40k faces (as the pipeline's final decimation leaves it), baked
-// into a 2048^2 texture from its four views rendered at 2048 px. BM_Open3dUvAtlas measures the
-// alternative parametrisation, Open3D 0.16's UVAtlas, on the same mesh (docs/file_formats.md).
+// into a 2048^2 texture from its four views rendered at 2048 px.
 #include <benchmark/benchmark.h>
 
-#include <open3d/geometry/TriangleMesh.h>
-#include <open3d/t/geometry/TriangleMesh.h>
-
 #include "geometry/loop_subdivision.h"
-#include "geometry/open3d_bridge.h"
 #include "geometry/quadric_decimation.h"
 #include "geometry/uv_atlas.h"
 #include "io/mesh_io.h"
@@ -74,16 +69,6 @@ void BM_BakeTexture(benchmark::State& state) {
   state.counters["texel_efficiency"] = report.texel_efficiency;
 }
 BENCHMARK(BM_BakeTexture)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
-
-void BM_Open3dUvAtlas(benchmark::State& state) {
-  const auto legacy = to_open3d(spot_40k());
-  for (auto _ : state) {
-    auto mesh = open3d::t::geometry::TriangleMesh::FromLegacy(*legacy);
-    mesh.ComputeUVAtlas(kSize, 4.f);
-    benchmark::DoNotOptimize(mesh);
-  }
-}
-BENCHMARK(BM_Open3dUvAtlas)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
 }  // namespace
 

@@ -15,9 +15,10 @@
 // scale that fits, with `gutter_texels` empty texels around every chart so bilinear lookups and
 // mipmaps of a dilated texture do not bleed between charts.
 //
-// Compared with Open3D's UVAtlas (docs/file_formats.md, "Textures"): about 100x faster on 40k faces
-// and never rejects a mesh, at more seams (the chart borders) and a lower but comparable texel
-// efficiency.
+// Why not Open3D's UVAtlas (t::geometry::TriangleMesh::ComputeUVAtlas): Debian's Open3D 0.16 is built
+// without it (it throws "UVAtlas not available in Debian"); it is also single-threaded and rejects
+// non-manifold meshes. Axis-aligned charts suit colours that come from axis-aligned views, take a
+// fraction of a second on 40k faces (bench/texture.cpp) and never reject a mesh.
 #include <vector>
 
 #include "core/mesh.h"
