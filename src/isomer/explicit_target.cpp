@@ -8,7 +8,9 @@
 #include "render/rasterizer.h"
 
 namespace u3d {
+namespace {
 
+// Bilinear RGBA sample at continuous pixel coordinates (pixel centres at +0.5), clamped at the border.
 Vec4f sample_rgba(const Image& image, float px, float py) {
   const float x = std::clamp(px - 0.5f, 0.f, float(image.width - 1));
   const float y = std::clamp(py - 0.5f, 0.f, float(image.height - 1));
@@ -22,7 +24,8 @@ Vec4f sample_rgba(const Image& image, float px, float py) {
   return out;
 }
 
-// Rows in parallel: at 2048 px this is 4M pixels a view.
+// Binary alpha (>= 0.5) eroded by `radius` pixels (square structuring element). Rows in parallel: at
+// 2048 px this is 4M pixels a view.
 Image eroded_mask_copy(const Image& rgba, int radius) {
   Image out = rgba;
   const int w = rgba.width, h = rgba.height;
@@ -41,6 +44,8 @@ Image eroded_mask_copy(const Image& rgba, int radius) {
     }
   return out;
 }
+
+}  // namespace
 
 std::vector<uint8_t> visible_vertices(const Mesh& mesh, const std::vector<Vec3f>& face_normals, View v,
                                       const ColorTargetOptions& options) {

@@ -37,13 +37,6 @@ struct ExplicitTarget {
   Vec3f mean(size_t v) const { return weight[v] > 0 ? Vec3f(weighted_sum[v] / weight[v]) : Vec3f(0, 0, 0); }
 };
 
-// Bilinear RGBA sample at continuous pixel coordinates (pixel centres at +0.5), clamped at the border.
-Vec4f sample_rgba(const Image& image, float px, float py);
-
-// A copy of an RGBA image whose alpha is the binary mask (alpha >= 0.5) eroded by `radius` pixels
-// (square structuring element): the colour masks of the colouring and of texture baking.
-Image eroded_mask_copy(const Image& rgba, int radius);
-
 // Vertices of `mesh` visible in view v by the rule above (nonzero = visible).
 std::vector<uint8_t> visible_vertices(const Mesh& mesh, const std::vector<Vec3f>& face_normals, View v,
                                       const ColorTargetOptions& options);

@@ -23,30 +23,87 @@ RasterBuffer rasterize_atlas(const Mesh& atlas, int size) {
   return rasterize(flat, atlas.faces, orthographic_camera(Vec3f::UnitZ(), size, size));
 }
 
+// The colour mask of a view as the vertex colouring uses it (explicit_target.h): alpha >= 0.5, eroded
+// by `radius` pixels with a square element, pixels outside the image counting as background. Two
+// separable passes, rows in parallel.
+std::vector<uint8_t> eroded_mask(const Image& rgba, int radius) {
+  const int w = rgba.width, h = rgba.height;
+  std::vector<uint8_t> across(size_t(w) * h), out(size_t(w) * h);
+#pragma omp parallel for schedule(static)
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      bool keep = true;
+      for (int dx = -radius; dx <= radius && keep; ++dx)
+        keep = x + dx >= 0 && x + dx < w && is_foreground(rgba.at(x + dx, y, 3));
+      across[size_t(y) * w + x] = keep;
+    }
+#pragma omp parallel for schedule(static)
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      bool keep = true;
+      for (int dy = -radius; dy <= radius && keep; ++dy)
+        keep = y + dy >= 0 && y + dy < h && across[size_t(y + dy) * w + x];
+      out[size_t(y) * w + x] = keep;
+    }
+  return out;
+}
+
+// RGB and mask of a view, bilinear at continuous pixel coordinates (pixel centres at +0.5), clamped
+// at the border: the vertex colouring's sampling of its eroded RGBA copy.
+Vec4f sample_view(const Image& image, const std::vector<uint8_t>& mask, float px, float py) {
+  const float x = std::clamp(px - 0.5f, 0.f, float(image.width - 1));
+  const float y = std::clamp(py - 0.5f, 0.f, float(image.height - 1));
+  const int x0 = int(x), y0 = int(y);
+  const int x1 = std::min(x0 + 1, image.width - 1), y1 = std::min(y0 + 1, image.height - 1);
+  const float fx = x - x0, fy = y - y0;
+  const float w00 = (1 - fx) * (1 - fy), w10 = fx * (1 - fy), w01 = (1 - fx) * fy, w11 = fx * fy;
+  Vec4f out;
+  for (int c = 0; c < 3; ++c)
+    out[c] = w00 * image.at(x0, y0, c) + w10 * image.at(x1, y0, c) + w01 * image.at(x0, y1, c) + w11 * image.at(x1, y1, c);
+  const size_t w = size_t(image.width);
+  out[3] = w00 * mask[y0 * w + x0] + w10 * mask[y0 * w + x1] + w01 * mask[y1 * w + x0] + w11 * mask[y1 * w + x1];
+  return out;
+}
+
 // Texels not yet set take the mean of their set 8-neighbours, `rounds` times (all of a round at once).
+// Only the texels next to the set region are visited.
 void dilate(Image& texture, std::vector<uint8_t>& set, int rounds) {
   const int w = texture.width, h = texture.height;
-  std::vector<uint8_t> next(set.size());
-  for (int round = 0; round < rounds; ++round) {
-    next = set;
+  auto for_neighbours = [&](int t, auto&& visit) {
+    const int x = t % w, y = t / w;
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx)
+        if ((dx || dy) && x + dx >= 0 && y + dy >= 0 && x + dx < w && y + dy < h) visit((y + dy) * w + x + dx);
+  };
+  std::vector<uint8_t> queued(set.size(), 0);
+  std::vector<int> frontier;
+  for (int t = 0; t < w * h; ++t)
+    if (!set[t]) {
+      bool next_to_set = false;
+      for_neighbours(t, [&](int n) { next_to_set = next_to_set || set[n]; });
+      if (next_to_set) frontier.push_back(t), queued[t] = 1;
+    }
+  for (int round = 0; round < rounds && !frontier.empty(); ++round) {
+    std::vector<Vec3f> values(frontier.size());
 #pragma omp parallel for schedule(static)
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) {
-        if (set[size_t(y) * w + x]) continue;
-        Vec3f sum(0, 0, 0);
-        int count = 0;
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx) {
-            const int xx = x + dx, yy = y + dy;
-            if (xx < 0 || yy < 0 || xx >= w || yy >= h || !set[size_t(yy) * w + xx]) continue;
-            sum += Eigen::Map<const Vec3f>(texture.pixel(xx, yy));
-            ++count;
-          }
-        if (!count) continue;
-        Eigen::Map<Vec3f>(texture.pixel(x, y)) = sum / float(count);
-        next[size_t(y) * w + x] = 1;
-      }
-    set.swap(next);
+    for (long long i = 0; i < (long long)frontier.size(); ++i) {
+      Vec3f sum(0, 0, 0);
+      int count = 0;
+      for_neighbours(frontier[i], [&](int n) {
+        if (set[n]) sum += Eigen::Map<const Vec3f>(texture.data.data() + size_t(n) * 3), ++count;
+      });
+      values[i] = sum / float(count);
+    }
+    for (size_t i = 0; i < frontier.size(); ++i) {
+      Eigen::Map<Vec3f>(texture.data.data() + size_t(frontier[i]) * 3) = values[i];
+      set[frontier[i]] = 1;
+    }
+    std::vector<int> next;
+    for (int t : frontier)
+      for_neighbours(t, [&](int n) {
+        if (!set[n] && !queued[n]) next.push_back(n), queued[n] = 1;
+      });
+    frontier.swap(next);
   }
 }
 
@@ -55,7 +112,9 @@ void dilate(Image& texture, std::vector<uint8_t>& set, int rounds) {
 TextureBakeReport bake_texture(Mesh& mesh, const ViewSet& views, const ColoringOptions& coloring,
                                const TextureBakeOptions& options) {
   require(options.depth_tolerance_px >= 0.f, "texture baking: depth tolerance must not be negative");
-  require(coloring.target.cos_power >= 0, "texture baking: cos power must not be negative");
+  const ColorTargetOptions& target = coloring.target;
+  require(target.cos_power >= 0, "texture baking: cos power must not be negative");
+  require(target.raster_resolution >= 16, "texture baking: raster resolution must be at least 16");
   TextureBakeReport report;
   auto start = std::chrono::steady_clock::now();
   const UvAtlas atlas = axis_chart_atlas(mesh, options.atlas);
@@ -64,83 +123,98 @@ TextureBakeReport bake_texture(Mesh& mesh, const ViewSet& views, const ColoringO
   report.texel_efficiency = atlas.texel_efficiency;
 
   start = std::chrono::steady_clock::now();
+  // The vertex colouring, from the views at the visibility raster's resolution (it only fills what
+  // the views barely see; at 2048 px it would cost more than the texels).
+  ViewSet reduced;
+  for (View v : kAllViews) {
+    const Image& rgb = views[v].rgb;
+    const int r = std::min(rgb.width, target.raster_resolution);
+    reduced[v].rgb = r < rgb.width ? resize_image(rgb, r, r) : rgb;
+  }
   Mesh vertex_colored = mesh;
-  report.vertices = color_mesh(vertex_colored, views, coloring);
-  const std::vector<Vec3f> normals = vertex_normals(mesh.positions, mesh.faces);
-  const std::vector<Vec3f> face_n = face_normals(mesh.positions, mesh.faces);
+  report.vertices = color_mesh(vertex_colored, reduced, coloring);
 
+  // Every covered texel's surface point and unit normal (interpolated vertex normals).
   const int size = options.atlas.texture_size;
   const RasterBuffer texels = rasterize_atlas(atlas.mesh, size);
-  const size_t n = texels.pixel_count();
-  std::vector<Vec3f> sum(n, Vec3f(0, 0, 0));
-  std::vector<float> weight(n, 0.f);
-  // The surface point and unit normal of a covered texel.
-  auto surface = [&](size_t t, Vec3f& p, Vec3f& nrm, Vec3f* vertex_color) {
-    const Vec3i& f = mesh.faces[texels.face_id[t]];
-    const Vec2f b = texels.bary[t];
+  std::vector<int32_t> covered;
+  for (int y = texels.footprint.y0; y <= texels.footprint.y1; ++y)
+    for (int x = texels.footprint.x0; x <= texels.footprint.x1; ++x)
+      if (texels.covered(size_t(y) * size + x)) covered.push_back(y * size + x);
+  const size_t count = covered.size();
+  const std::vector<Vec3f> normals = vertex_normals(mesh.positions, mesh.faces);
+  const std::vector<Vec3f> face_n = face_normals(mesh.positions, mesh.faces);
+  std::vector<Vec3f> points(count), texel_normals(count), fallback(count);
+#pragma omp parallel for schedule(static)
+  for (long long i = 0; i < (long long)count; ++i) {
+    const int face = texels.face_id[covered[i]];
+    const Vec3i& f = mesh.faces[face];
+    const Vec2f b = texels.bary[covered[i]];
     const float b0 = 1.f - b.x() - b.y();
-    p = b0 * mesh.positions[f[0]] + b.x() * mesh.positions[f[1]] + b.y() * mesh.positions[f[2]];
-    nrm = b0 * normals[f[0]] + b.x() * normals[f[1]] + b.y() * normals[f[2]];
-    nrm = nrm.squaredNorm() > 0.f ? Vec3f(nrm.normalized()) : face_n[texels.face_id[t]];
-    if (vertex_color)
-      *vertex_color = b0 * vertex_colored.colors[f[0]] + b.x() * vertex_colored.colors[f[1]] +
-                      b.y() * vertex_colored.colors[f[2]];
-  };
-  const ColorTargetOptions& target = coloring.target;
+    points[i] = b0 * mesh.positions[f[0]] + b.x() * mesh.positions[f[1]] + b.y() * mesh.positions[f[2]];
+    const Vec3f n = b0 * normals[f[0]] + b.x() * normals[f[1]] + b.y() * normals[f[2]];
+    texel_normals[i] = n.squaredNorm() > 0.f ? Vec3f(n.normalized()) : face_n[face];
+    fallback[i] = b0 * vertex_colored.colors[f[0]] + b.x() * vertex_colored.colors[f[1]] + b.y() * vertex_colored.colors[f[2]];
+  }
+
+  // ExplicitTarget per texel.
+  std::vector<Vec3f> sum(count, Vec3f(0, 0, 0));
+  std::vector<float> weight(count, 0.f);
   for (View v : kAllViews) {
     const float view_weight = target.view_weights[size_t(v)];
     if (view_weight <= 0.f) continue;
-    const Image image = eroded_mask_copy(views[v].rgb, coloring.mask_erosion_px);
+    const Image& image = views[v].rgb;
+    require(image.channels == 4 && image.width > 1 && image.height > 1,
+            std::string("texture baking: the ") + view_name(v) + " image must be RGBA");
+    const std::vector<uint8_t> mask = eroded_mask(image, coloring.mask_erosion_px);
     const Camera cam = view_camera(v, image.width);
-    const RasterBuffer depth = rasterize(mesh, cam);
+    const RasterBuffer depth = rasterize(mesh, view_camera(v, target.raster_resolution));
+    const float to_raster = float(target.raster_resolution) / float(image.width);
+    const float tolerance = options.depth_tolerance_px * 2.f / float(target.raster_resolution);  // the view spans 2 units
     const Vec3f toward = cam.toward_camera();
-    const float tolerance = options.depth_tolerance_px * 2.f / float(image.width);  // the view spans 2 units
-#pragma omp parallel for schedule(dynamic, 16)
-    for (int y = texels.footprint.y0; y <= texels.footprint.y1; ++y)
-      for (int x = texels.footprint.x0; x <= texels.footprint.x1; ++x) {
-        const size_t t = size_t(y) * size + x;
-        if (!texels.covered(t) || face_n[texels.face_id[t]].dot(toward) <= target.facing_epsilon) continue;
-        Vec3f p, nrm;
-        surface(t, p, nrm, nullptr);
-        const Vec3f px = cam.to_pixel(p);
-        if (!(px.x() >= 0.f && px.y() >= 0.f && px.x() < float(image.width) && px.y() < float(image.height)))
-          continue;
-        const size_t pixel = size_t(int(px.y())) * depth.width + size_t(int(px.x()));
-        if (depth.covered(pixel) && depth.face_id[pixel] != texels.face_id[t] &&
-            px.z() > depth.depth[pixel] + tolerance)
-          continue;  // hidden behind other surface
-        const Vec4f s = sample_rgba(image, px.x(), px.y());
-        const float w = view_weight * std::pow(std::abs(nrm.dot(toward)), float(target.cos_power)) *
-                        std::clamp(s[3], 0.f, 1.f);
-        sum[t] += w * s.head<3>().cwiseMax(0.f).cwiseMin(1.f);
-        weight[t] += w;
-      }
+#pragma omp parallel for schedule(static)
+    for (long long i = 0; i < (long long)count; ++i) {
+      const int face = texels.face_id[covered[i]];
+      if (face_n[face].dot(toward) <= target.facing_epsilon) continue;
+      const Vec3f px = cam.to_pixel(points[i]);
+      if (!(px.x() >= 0.f && px.y() >= 0.f && px.x() < float(image.width) && px.y() < float(image.height))) continue;
+      const int rx = std::min(int(px.x() * to_raster), depth.width - 1), ry = std::min(int(px.y() * to_raster), depth.height - 1);
+      const size_t pixel = size_t(ry) * depth.width + rx;
+      if (depth.covered(pixel) && depth.face_id[pixel] != face && px.z() > depth.depth[pixel] + tolerance)
+        continue;  // hidden behind other surface
+      const Vec4f s = sample_view(image, mask, px.x(), px.y());
+      float w = view_weight * s[3];
+      const float c = std::abs(texel_normals[i].dot(toward));
+      for (int k = 0; k < target.cos_power; ++k) w *= c;
+      sum[i] += w * s.head<3>().cwiseMax(0.f).cwiseMin(1.f);
+      weight[i] += w;
+    }
   }
 
+  // Colours: the weighted mean, fading below the threshold toward the vertex colouring.
   Image texture(size, size, 3, 0.f);
-  std::vector<uint8_t> set(n, 0);
+  std::vector<uint8_t> set(texels.pixel_count(), 0);
   const float threshold = coloring.confidence_threshold;
-  Vec3f covered_sum(0, 0, 0);
-  for (size_t t = 0; t < n; ++t) {
-    if (!texels.covered(t)) continue;
+  size_t confident = 0;
+#pragma omp parallel for schedule(static) reduction(+ : confident)
+  for (long long i = 0; i < (long long)count; ++i) {
     Vec3f color;
-    if (weight[t] >= threshold && weight[t] > 0.f) {
-      color = sum[t] / weight[t];
-      ++report.texels_confident;
+    if (weight[i] >= threshold && weight[i] > 0.f) {
+      color = sum[i] / weight[i];
+      ++confident;
     } else {
-      Vec3f p, nrm, vertex_color;
-      surface(t, p, nrm, &vertex_color);
-      color = threshold > 0.f ? Vec3f((sum[t] + (threshold - weight[t]) * vertex_color) / threshold) : vertex_color;
+      color = threshold > 0.f ? Vec3f((sum[i] + (threshold - weight[i]) * fallback[i]) / threshold) : fallback[i];
     }
-    color = color.cwiseMax(0.f).cwiseMin(1.f);
-    Eigen::Map<Vec3f>(texture.data.data() + t * 3) = color;
-    covered_sum += color;
-    set[t] = 1;
-    ++report.texels_covered;
+    Eigen::Map<Vec3f>(texture.data.data() + size_t(covered[i]) * 3) = color.cwiseMax(0.f).cwiseMin(1.f);
+    set[covered[i]] = 1;
   }
+  report.texels_covered = count;
+  report.texels_confident = confident;
+  Eigen::Vector3d total(0, 0, 0);
+  for (int32_t t : covered) total += Eigen::Map<const Vec3f>(texture.data.data() + size_t(t) * 3).cast<double>();
   dilate(texture, set, options.atlas.gutter_texels + 2);
-  const Vec3f mean = report.texels_covered ? Vec3f(covered_sum / float(report.texels_covered)) : Vec3f(0.5f, 0.5f, 0.5f);
-  for (size_t t = 0; t < n; ++t)
+  const Vec3f mean = count ? Vec3f((total / double(count)).cast<float>()) : Vec3f(0.5f, 0.5f, 0.5f);
+  for (size_t t = 0; t < set.size(); ++t)
     if (!set[t]) Eigen::Map<Vec3f>(texture.data.data() + t * 3) = mean;
   report.bake_seconds = seconds_since(start);
 

@@ -5,12 +5,14 @@
 // The mesh gets a UV atlas (geometry/uv_atlas.h, axis-aligned charts). Each texel whose centre a
 // chart triangle covers is a surface point p with the interpolated vertex normal n; for every view
 // that sees p (its face faces the camera by more than facing_epsilon, and p lies on the view's depth
-// buffer: within `depth_tolerance_px` view pixels of the nearest surface, or on the face the buffer
-// holds there), the eroded view image is sampled bilinearly at p's projection with the ExplicitTarget
-// weight view_weight * |cos(n, toward camera)|^cos_power * alpha. Texels whose total weight w reaches
-// the confidence threshold t take the weighted mean; below it they fade, as the official "smooth"
-// rule does for vertices, toward the vertex colouring (ExplicitTarget + completion on the mesh, which
-// fills what no view sees smoothly and without seams): (sum + (t - w) * vertex colour) / t. Texels no
+// buffer, rasterized at the colouring's raster_resolution: within `depth_tolerance_px` of its pixels
+// of the nearest surface, or on the face the buffer holds there), the view image is sampled
+// bilinearly at p's projection with the ExplicitTarget weight
+// view_weight * |cos(n, toward camera)|^cos_power * (the colour mask, eroded as for vertices).
+// Texels whose total weight w reaches the confidence threshold t take the weighted mean; below it
+// they fade, as the official "smooth" rule does for vertices, toward the vertex colouring
+// (ExplicitTarget + completion on the mesh, from the views reduced to raster_resolution; it fills
+// what no view sees smoothly and without seams): (sum + (t - w) * vertex colour) / t. Texels no
 // triangle covers are dilated from their neighbours for gutter + 2 rounds (so bilinear lookups and
 // the first mipmaps at chart borders see the chart's own colours), and the rest of the atlas takes
 // the mean colour.
