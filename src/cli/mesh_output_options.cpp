@@ -38,11 +38,12 @@ void print_texture_summary(const ReconstructOptions& options, const ReconstructS
   if (options.color_mode != ColorMode::Texture) return;
   const TextureBakeReport& t = summary.texture;
   const int size = options.texture.atlas.texture_size;
-  std::printf("texture: %dx%d, %d charts, %.1f %% of the texels used, %.1f %% of those from the views; UV %.2f s, "
-              "baking %.2f s\n",
-              size, size, t.charts, 100.0 * t.texel_efficiency,
-              t.texels_covered ? 100.0 * double(t.texels_confident) / double(t.texels_covered) : 0.0, t.uv_seconds,
-              t.bake_seconds);
+  std::printf(
+      "texture: %dx%d, %d charts, %.1f %% of the texels used, %.1f %% of those from the views; UV %.2f s, "
+      "baking %.2f s\n",
+      size, size, t.charts, 100.0 * t.texel_efficiency,
+      t.texels_covered ? 100.0 * double(t.texels_confident) / double(t.texels_covered) : 0.0, t.uv_seconds,
+      t.bake_seconds);
 }
 
 }  // namespace u3d::cli

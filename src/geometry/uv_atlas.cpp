@@ -30,7 +30,7 @@ const std::array<Axis, 6> kAxes = {{
 struct Chart {
   int axis = 0;
   std::vector<int> faces;
-  bool rotated = false;  // turned a quarter (counter-clockwise) so it is at least as wide as tall
+  bool rotated = false;         // turned a quarter (counter-clockwise) so it is at least as wide as tall
   Vec2f min{0, 0}, size{0, 0};  // bounding box of the (turned) projection, world units
   float area = 0.f;             // projected area, world units squared
   Vec2f origin{0, 0};           // packed position of the bounding box's corner, texels
@@ -92,8 +92,10 @@ void measure(Chart& c, const Mesh& mesh) {
     }
     c.min = lo;
     c.size = hi - lo;
-    if (pass == 0 && c.size.y() > c.size.x()) c.rotated = true;
-    else break;
+    if (pass == 0 && c.size.y() > c.size.x())
+      c.rotated = true;
+    else
+      break;
   }
 }
 
@@ -137,7 +139,8 @@ bool pack(std::vector<Chart>& charts, const std::vector<int>& order, float scale
   float x = 0.f, y = 0.f, shelf = 0.f;
   for (int i : order) {
     Chart& c = charts[i];
-    const float w = std::ceil(c.size.x() * scale) + 1.f + float(gutter), h = std::ceil(c.size.y() * scale) + 1.f + float(gutter);
+    const float w = std::ceil(c.size.x() * scale) + 1.f + float(gutter),
+                h = std::ceil(c.size.y() * scale) + 1.f + float(gutter);
     if (w > float(size)) return false;
     if (x + w > float(size)) y += shelf, x = 0.f, shelf = 0.f;
     if (y + h > float(size)) return false;

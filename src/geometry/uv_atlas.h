@@ -6,13 +6,12 @@
 // be crushed in a side projection); labels are then smoothed (a face takes the label two or three of
 // its neighbours share when it still faces that axis by more than `min_axis_cos`), and islands of
 // fewer than `min_chart_faces` faces join the neighbouring label they share most edges with, when
-// all their faces face its axis by more than `min_axis_cos`. Charts are the edge-connected pieces of one label, each projected
-// orthographically onto its axis plane, seen from outside (so faces keep their counter-clockwise
-// winding in UV and no face flips). A chart whose projection overlaps itself (a surface that folds
-// over while still facing the axis) is split at the median depth along the axis until no texel
-// centre is covered twice. The charts are packed into the square atlas by shelf packing (tallest
-// first, a chart is turned a quarter when that makes it wider than tall) at the largest common
-// scale that fits, with `gutter_texels` empty texels around every chart so bilinear lookups and
+// all their faces face its axis by more than `min_axis_cos`. Charts are the edge-connected pieces of one label, each
+// projected orthographically onto its axis plane, seen from outside (so faces keep their counter-clockwise winding in
+// UV and no face flips). A chart whose projection overlaps itself (a surface that folds over while still facing the
+// axis) is split at the median depth along the axis until no texel centre is covered twice. The charts are packed into
+// the square atlas by shelf packing (tallest first, a chart is turned a quarter when that makes it wider than tall) at
+// the largest common scale that fits, with `gutter_texels` empty texels around every chart so bilinear lookups and
 // mipmaps of a dilated texture do not bleed between charts.
 //
 // Why not Open3D's UVAtlas (t::geometry::TriangleMesh::ComputeUVAtlas): Debian's Open3D 0.16 is built
@@ -39,8 +38,8 @@ struct UvAtlas {
   std::vector<int> source_vertex;  // per atlas vertex, the input vertex it copies
   std::vector<int> face_chart;     // per face (same order as the input), its chart
   int chart_count = 0;
-  float texels_per_unit = 0.f;    // the packing scale: atlas texels per world unit
-  float texel_efficiency = 0.f;   // share of the atlas's texels the charts' triangles cover
+  float texels_per_unit = 0.f;   // the packing scale: atlas texels per world unit
+  float texel_efficiency = 0.f;  // share of the atlas's texels the charts' triangles cover
 };
 
 // Throws Error for an empty mesh or options out of range (texture_size < 16, gutter < 0, or a

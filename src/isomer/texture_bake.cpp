@@ -19,7 +19,8 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 // the top, is v = 1 as the mesh UV convention wants).
 RasterBuffer rasterize_atlas(const Mesh& atlas, int size) {
   std::vector<Vec3f> flat(atlas.uvs.size());
-  for (size_t i = 0; i < flat.size(); ++i) flat[i] = Vec3f(2.f * atlas.uvs[i].x() - 1.f, 2.f * atlas.uvs[i].y() - 1.f, 0.f);
+  for (size_t i = 0; i < flat.size(); ++i)
+    flat[i] = Vec3f(2.f * atlas.uvs[i].x() - 1.f, 2.f * atlas.uvs[i].y() - 1.f, 0.f);
   return rasterize(flat, atlas.faces, orthographic_camera(Vec3f::UnitZ(), size, size));
 }
 
@@ -59,7 +60,8 @@ Vec4f sample_view(const Image& image, const std::vector<uint8_t>& mask, float px
   const float w00 = (1 - fx) * (1 - fy), w10 = fx * (1 - fy), w01 = (1 - fx) * fy, w11 = fx * fy;
   Vec4f out;
   for (int c = 0; c < 3; ++c)
-    out[c] = w00 * image.at(x0, y0, c) + w10 * image.at(x1, y0, c) + w01 * image.at(x0, y1, c) + w11 * image.at(x1, y1, c);
+    out[c] =
+        w00 * image.at(x0, y0, c) + w10 * image.at(x1, y0, c) + w01 * image.at(x0, y1, c) + w11 * image.at(x1, y1, c);
   const size_t w = size_t(image.width);
   out[3] = w00 * mask[y0 * w + x0] + w10 * mask[y0 * w + x1] + w01 * mask[y1 * w + x0] + w11 * mask[y1 * w + x1];
   return out;
@@ -154,7 +156,8 @@ TextureBakeReport bake_texture(Mesh& mesh, const ViewSet& views, const ColoringO
     points[i] = b0 * mesh.positions[f[0]] + b.x() * mesh.positions[f[1]] + b.y() * mesh.positions[f[2]];
     const Vec3f n = b0 * normals[f[0]] + b.x() * normals[f[1]] + b.y() * normals[f[2]];
     texel_normals[i] = n.squaredNorm() > 0.f ? Vec3f(n.normalized()) : face_n[face];
-    fallback[i] = b0 * vertex_colored.colors[f[0]] + b.x() * vertex_colored.colors[f[1]] + b.y() * vertex_colored.colors[f[2]];
+    fallback[i] =
+        b0 * vertex_colored.colors[f[0]] + b.x() * vertex_colored.colors[f[1]] + b.y() * vertex_colored.colors[f[2]];
   }
 
   // ExplicitTarget per texel.
@@ -170,7 +173,8 @@ TextureBakeReport bake_texture(Mesh& mesh, const ViewSet& views, const ColoringO
     const Camera cam = view_camera(v, image.width);
     const RasterBuffer depth = rasterize(mesh, view_camera(v, target.raster_resolution));
     const float to_raster = float(target.raster_resolution) / float(image.width);
-    const float tolerance = options.depth_tolerance_px * 2.f / float(target.raster_resolution);  // the view spans 2 units
+    const float tolerance =
+        options.depth_tolerance_px * 2.f / float(target.raster_resolution);  // the view spans 2 units
     const Vec3f toward = cam.toward_camera();
 #pragma omp parallel for schedule(static)
     for (long long i = 0; i < (long long)count; ++i) {
@@ -178,7 +182,8 @@ TextureBakeReport bake_texture(Mesh& mesh, const ViewSet& views, const ColoringO
       if (face_n[face].dot(toward) <= target.facing_epsilon) continue;
       const Vec3f px = cam.to_pixel(points[i]);
       if (!(px.x() >= 0.f && px.y() >= 0.f && px.x() < float(image.width) && px.y() < float(image.height))) continue;
-      const int rx = std::min(int(px.x() * to_raster), depth.width - 1), ry = std::min(int(px.y() * to_raster), depth.height - 1);
+      const int rx = std::min(int(px.x() * to_raster), depth.width - 1),
+                ry = std::min(int(px.y() * to_raster), depth.height - 1);
       const size_t pixel = size_t(ry) * depth.width + rx;
       if (depth.covered(pixel) && depth.face_id[pixel] != face && px.z() > depth.depth[pixel] + tolerance)
         continue;  // hidden behind other surface

@@ -29,7 +29,7 @@ struct TextureBakeOptions {
 };
 
 struct TextureBakeReport {
-  ColoringReport vertices;       // the vertex colouring under the threshold
+  ColoringReport vertices;  // the vertex colouring under the threshold
   int charts = 0;
   float texel_efficiency = 0.f;  // share of the atlas the charts cover
   size_t texels_covered = 0;     // texels a chart triangle covers

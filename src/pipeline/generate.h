@@ -37,7 +37,7 @@ struct GenerateRequest {
   RefineOptions refine_options;
   NormalOptions normals;
   ReconstructOptions reconstruct;
-  bool official_output_scale = false;  // as ReconstructRequest
+  bool official_output_scale = false;                 // as ReconstructRequest
   TextureFormat texture_format = TextureFormat::Png;  // as ReconstructRequest
 };
 

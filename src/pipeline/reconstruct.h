@@ -22,15 +22,15 @@ inline constexpr float kOfficialOutputScale = 0.675f;
 struct ReconstructRequest {
   std::filesystem::path views_dir;  // front/right/back/left _rgb.png and _normal.png (core/view_set.h)
   NormalSpace normal_space = NormalSpace::World;
-  std::filesystem::path output;        // .glb, .obj or .ply
-  bool previews = false;               // also <stem>_views.png (the four views) and <stem>_turntable.png
-  bool official_output_scale = false;  // write the mesh scaled by kOfficialOutputScale
+  std::filesystem::path output;                       // .glb, .obj or .ply
+  bool previews = false;                              // also <stem>_views.png (the four views) and <stem>_turntable.png
+  bool official_output_scale = false;                 // write the mesh scaled by kOfficialOutputScale
   TextureFormat texture_format = TextureFormat::Png;  // of the baked texture (options.color_mode Texture)
   ReconstructOptions options;
 };
 
 struct ReconstructSummary {
-  Mesh mesh;  // as reconstructed, in the views' frame (the file may be scaled)
+  Mesh mesh;              // as reconstructed, in the views' frame (the file may be scaled)
   MeshTopology topology;  // of the surface (UV seams are not borders)
   ColoringReport coloring;
   TextureBakeReport texture;              // with ColorMode::Texture

@@ -125,7 +125,8 @@ TEST(TextureBake, GlbTexturesFollowTheGltfUvConvention) {
       const int x = std::min(int(uvs[2 * v] * texture.width), texture.width - 1);
       const int y = std::min(int(uvs[2 * v + 1] * texture.height), texture.height - 1);  // row 0 = top
       const Vec3f n = Vec3f(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]).normalized();
-      error += (Vec3f(texture.at(x, y, 0), texture.at(x, y, 1), texture.at(x, y, 2)) - surface_color(n)).cwiseAbs().mean();
+      error +=
+          (Vec3f(texture.at(x, y, 0), texture.at(x, y, 1), texture.at(x, y, 2)) - surface_color(n)).cwiseAbs().mean();
     }
     EXPECT_LT(error / double(count), 0.04) << path;
 
