@@ -64,7 +64,9 @@ ReconstructResult reconstruct(const ViewSet& views, const ReconstructOptions& op
       mesh = fit_to_silhouettes(mesh, views, fit.final_resolution, size_t(fit.final_faces));
       fitted = true;
     });
-  if (!fitted) timed("smooth and subdivide", [&] { mesh = smooth_and_subdivide(mesh, options.cleanup); });
+  timed("smooth and subdivide", [&] {
+    if (!fitted) mesh = smooth_and_subdivide(mesh, options.cleanup);
+  });
   timed("colouring", [&] { result.coloring = color_mesh(mesh, views, options.coloring); });
   mesh.validate("reconstructed mesh");
   result.mesh = std::move(mesh);

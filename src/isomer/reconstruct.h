@@ -6,8 +6,8 @@
 //   2. coarse optimisation     (coarse_stage.h: fit normals and masks at 512 px)
 //   3. refinement              (refine_stage.h: ExplicitTarget normals, rendered at up to 512 px)
 //   3b. silhouette fit         (silhouette_fit.h: only when the optimised mesh disagrees with a mask)
-//   4. smooth and subdivide    (surface_cleanup.h; skipped for a mesh the silhouette fit made: both
-//                               would thin out its plates)
+//   4. smooth and subdivide    (surface_cleanup.h; a mesh the silhouette fit made is left as it is:
+//                               both would thin out its plates)
 //   5. colouring               (explicit_target.h: ExplicitTarget + completion)
 // Each stage is a function of the mesh so far; reconstruct() runs them in order and times each. The
 // result is in the views' world frame; the official release's output scale is applied when writing

@@ -3,12 +3,14 @@
 // parts). The normal-integration initial mesh can bridge a frame's open bays, lose a plate whose front
 // and back sheets cross, or drop a small separate part; the optimisation stages cannot change the
 // topology back. The masks alone bound the object by its visual hull (visual_hull.h), so on a grid
-//     solid = hull AND (mesh OR unexplained),
-// where a grid column (along z for the front and back views, along x for the sides) is unexplained
-// when the hull reaches into it but `hull AND mesh` does not: there the mesh misses part of a mask,
-// and the hull's column is taken as it is. Everything the mesh adds outside the masks is cut away, and
-// every pixel of every mask is covered again, so the result's silhouettes are those of the hull.
-// Where the mesh already fits the masks it is kept as it is, up to the grid's resolution.
+//     solid = hull AND (mesh OR from_hull),
+// where a grid column (along z for the front and back views, along x for the sides) is taken from
+// the hull when the hull reaches into it but `hull AND mesh` does not (fewer than 2 samples): there
+// the mesh misses part of a mask. It is also taken from the hull when `hull AND mesh` fills at least
+// 30 % of the hull's samples in it: mesh and hull agree there but for a dent or a thinned plate.
+// Everything the mesh adds outside the masks is cut away, and every pixel of every mask is covered
+// again, so the result's silhouettes are those of the hull. Elsewhere (the hull far deeper than the
+// mesh: a concavity) the mesh is kept, up to the grid's resolution.
 //
 // The mesh's inside comes from column_occupancy.h (the region between crossed plate sheets counts as
 // inside), the surface from marching tetrahedra on the combined field, and quadric decimation brings

@@ -114,6 +114,36 @@ TEST(SilhouetteFit, CrossedPlateSheetsBecomeOnePlate) {
   EXPECT_GT(min_iou(fitted, views), 0.97f);
 }
 
+// The optimisation thinned a plate to 40 % of its thickness: where the mesh fills most of the hull's
+// column, the column is the hull's, and the plate gets its thickness back. A concavity the hull cannot
+// see (a column the mesh fills less than 30 % of) keeps the mesh.
+TEST(SilhouetteFit, ThinnedPlateGetsTheHullsThickness) {
+  const Vec3f lo(-0.5f, -0.6f, -0.05f), hi(0.5f, 0.6f, 0.05f);
+  const ViewSet views = boxes_views({{lo, hi}}, 256);
+  const Mesh thinned = box_mesh({lo.x(), lo.y(), -0.02f}, {hi.x(), hi.y(), 0.02f});
+  const Mesh fitted = fit_to_silhouettes(thinned, views, 192, 2000);
+  const double ratio = mesh_topology(fitted).volume / double((hi - lo).prod());  // the mesh had 0.4
+  EXPECT_GT(ratio, 0.9);  // within a voxel (0.0104) of the 0.1 thickness
+  EXPECT_LT(ratio, 1.05);
+
+  // A block with a pocket 0.8 deep open to the front: its back and its four walls are 0.2 thick, so
+  // every column through the pocket (along z and along x) holds 20 % mesh: the pocket stays open.
+  const ViewSet block_views = boxes_views({{{-0.5f, -0.5f, -0.5f}, {0.5f, 0.5f, 0.5f}}}, 256);
+  Mesh pocketed;
+  const std::vector<Box> parts = {{{-0.5f, -0.5f, -0.5f}, {0.5f, 0.5f, -0.3f}},  // back
+                                  {{-0.5f, -0.5f, -0.5f}, {-0.4f, 0.5f, 0.5f}},  // left and right walls
+                                  {{0.4f, -0.5f, -0.5f}, {0.5f, 0.5f, 0.5f}},
+                                  {{-0.5f, -0.5f, -0.5f}, {0.5f, -0.4f, 0.5f}},  // bottom and top
+                                  {{-0.5f, 0.4f, -0.5f}, {0.5f, 0.5f, 0.5f}}};
+  for (const Box& b : parts) {
+    const Mesh part = box_mesh(b.first, b.second);
+    for (const Vec3i& f : part.faces) pocketed.faces.push_back(f + Vec3i::Constant(int(pocketed.positions.size())));
+    pocketed.positions.insert(pocketed.positions.end(), part.positions.begin(), part.positions.end());
+  }
+  const Mesh kept = fit_to_silhouettes(pocketed, block_views, 192, 4000);
+  EXPECT_NEAR(mesh_topology(kept).volume, 1.0 - 0.8 * 0.8 * 0.8, 0.03);
+}
+
 // A sign on a pole with a small box beside it; the mesh lost the box and bulges out of the masks
 // above the sign. The fit brings the box back as its own part and cuts the bulge.
 TEST(SilhouetteFit, LostPartComesBackAndExcessIsCut) {
