@@ -93,12 +93,30 @@ std::string fmt(double v, const char* spec) {
 }
 
 const std::vector<std::string> kMetricKeys = {"cd",   "iou",  "fscore",  "fscore_visible", "hidden",
-                                              "psnr", "ssim", "seconds", "faces",          "mb"};
+                                              "psnr", "ssim", "silhouette_iou_min", "seconds", "faces", "mb"};
+
+// The smallest of the four per-view silhouette IoUs `unique3d reconstruct` prints
+// ("silhouette IoU: front F, right R, back B, left L"); negative when the line is missing.
+double min_silhouette_iou(const std::string& output) {
+  const std::string key = "silhouette IoU:";
+  const size_t at = output.find(key);
+  if (at == std::string::npos) return -1.0;
+  std::istringstream line(output.substr(at + key.size(), output.find('\n', at) - at - key.size()));
+  double lowest = 2.0;
+  int found = 0;
+  for (std::string word; line >> word;) {
+    if (word.back() == ',') word.pop_back();
+    char* end = nullptr;
+    const double v = std::strtod(word.c_str(), &end);
+    if (end != word.c_str() && *end == '\0') lowest = std::min(lowest, v), ++found;
+  }
+  return found == 4 ? lowest : -1.0;
+}
 
 std::string markdown(const json& rows, const json& means, const std::string& fscore_label) {
   std::string md = "| object | res | variant | CD-L1 | Vol. IoU | " + fscore_label + " | " + fscore_label +
-                   " visible GT | hidden GT | PSNR | SSIM | time (s) | faces | GLB (MB) | status |\n"
-                   "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+                   " visible GT | hidden GT | PSNR | SSIM | min sil. IoU | time (s) | faces | GLB (MB) | status |\n"
+                   "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   auto cell = [](const json& row, const std::string& key, const char* spec) {
     return row.contains(key) && row[key].is_number() ? fmt(row[key].get<double>(), spec) : std::string("-");
   };
@@ -107,7 +125,7 @@ std::string markdown(const json& rows, const json& means, const std::string& fsc
           r["variant"].get<std::string>() + " | " + cell(r, "cd", "%.5f") + " | " + cell(r, "iou", "%.4f") + " | " +
           cell(r, "fscore", "%.4f") + " | " + cell(r, "fscore_visible", "%.4f") + " | " + cell(r, "hidden", "%.3f") +
           " | " + cell(r, "psnr", "%.2f") + " | " + cell(r, "ssim", "%.4f") + " | " +
-          cell(r, "seconds", "%.1f") + " | " + cell(r, "faces", "%.0f") + " | " + cell(r, "mb", "%.2f") + " | " + r["status"].get<std::string>() + " |\n";
+          cell(r, "silhouette_iou_min", "%.4f") + " | " + cell(r, "seconds", "%.1f") + " | " + cell(r, "faces", "%.0f") + " | " + cell(r, "mb", "%.2f") + " | " + r["status"].get<std::string>() + " |\n";
   };
   for (const auto& r : rows) line(r);
   for (const auto& r : means) line(r);
@@ -240,6 +258,8 @@ int main(int argc, char** argv) {
         std::fflush(stdout);
         r = run(bin + " reconstruct " + quote(views) + " -o " + quote(recon) + " " + v.flags, dir / (tag + "_reconstruct.log"));
         row["seconds"] = r.seconds;
+        const double silhouette = min_silhouette_iou(r.output);
+        if (silhouette >= 0.0) row["silhouette_iou_min"] = silhouette;
         if (r.status != 0) {
           row["status"] = "reconstruct failed: " + last_line(r.output);
           rows.push_back(row);
@@ -302,7 +322,8 @@ int main(int argc, char** argv) {
               {"notes", notes}};
   std::string md = "# Object benchmark\n\nFrame: " + doc["frame"].get<std::string>() + "; CD-L1, IoU, " + fscore_label +
                    " (also over the GT surface visible from outside; hidden GT = share of GT samples no outside view sees), "
-                   "PSNR, SSIM as defined in docs/evaluation.md; time = wall time of `unique3d reconstruct`.\n";
+                   "PSNR, SSIM as defined in docs/evaluation.md; min sil. IoU = the smallest of the four silhouette IoUs against "
+                   "the input masks that `unique3d reconstruct` prints; time = wall time of `unique3d reconstruct`.\n";
   if (!perturb_args.empty()) md += "Views perturbed with `unique3d perturb " + perturb_args + "`.\n";
   md += "\n" + markdown(rows, means, fscore_label);
   if (!notes.empty()) {

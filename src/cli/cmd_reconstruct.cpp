@@ -85,6 +85,11 @@ const CommandRegistration registration{
           ->capture_default_str()
           ->check(CLI::Range(4, 1024))
           ->needs(visual_hull);
+      sub.add_flag_function(
+             "--no-silhouette-fit", [args](int64_t) { args->request.options.silhouette_fit.enabled = false; },
+             "Ablation: never fit the mesh to the visual hull of the masks (neither the initial mesh nor the "
+             "optimised one)")
+          ->excludes(visual_hull);
       sub.add_flag("--no-explicit-target", args->no_explicit_target,
                    "Ablation: refine with the plain multi-view normal loss instead of ExplicitTarget normals")
           ->excludes(init_only)

@@ -5,14 +5,20 @@
 
 #include "core/error.h"
 #include "core/progress.h"
+#include "geometry/mesh_topology.h"
 #include "geometry/quadric_decimation.h"
 
 namespace u3d {
 
-Mesh stage_initial_mesh(const ViewSet& views, const ReconstructOptions& options) {
+Mesh stage_initial_mesh(const ViewSet& views, const ReconstructOptions& options, bool* fitted) {
+  if (fitted) *fitted = false;
   if (options.visual_hull) return carve_visual_hull(views, options.hull);
   if (options.sphere_init) return sphere_initial_mesh();
-  return build_initial_mesh(views, options.init);
+  Mesh initial = build_initial_mesh(views, options.init);
+  const SilhouetteFitOptions& fit = options.silhouette_fit;
+  if (!fit.enabled || min_silhouette_iou(initial, views) >= fit.initial_min_iou) return initial;
+  if (fitted) *fitted = true;
+  return fit_to_silhouettes(initial, views, fit.resolution, size_t(options.init.target_faces));
 }
 
 size_t final_face_count(const ReconstructOptions& options) {
@@ -29,7 +35,8 @@ ReconstructResult reconstruct(const ViewSet& views, const ReconstructOptions& op
   };
   Mesh mesh;
   const char* start = options.visual_hull ? "visual hull" : options.sphere_init ? "sphere" : "initial mesh";
-  timed(start, [&] { mesh = stage_initial_mesh(views, options); });
+  bool fitted = false;  // the mesh is the silhouette fit's, not changed since
+  timed(start, [&] { mesh = stage_initial_mesh(views, options, &fitted); });
   if (options.run_coarse || options.run_refine) {
     // Both stages work below the input resolution (by default both at 512 px): encode the maps and
     // downsample each working resolution once, inside the first stage's time. At 2048 px input this
@@ -44,6 +51,7 @@ ReconstructResult reconstruct(const ViewSet& views, const ReconstructOptions& op
       }
       return it->second;
     };
+    fitted = false;
     if (options.run_coarse)
       timed("coarse", [&] { mesh = run_coarse_stage(mesh, working_views(kCoarseMapResolution), options.coarse, &result.coarse); });
     if (options.run_refine)
@@ -51,7 +59,20 @@ ReconstructResult reconstruct(const ViewSet& views, const ReconstructOptions& op
         mesh = run_refine_stage(mesh, working_views(options.refine.render_resolution), options.refine, &result.refine);
       });
   }
-  timed("smooth and subdivide", [&] { mesh = smooth_and_subdivide(mesh, options.cleanup); });
+  const SilhouetteFitOptions& fit = options.silhouette_fit;
+  if (fit.enabled && (options.run_coarse || options.run_refine))
+    timed("silhouette fit", [&] {
+      if (min_silhouette_iou(mesh, views) >= fit.final_min_iou) return;
+      if (!mesh_topology(mesh).watertight) {
+        progress("silhouette fit skipped: the optimised mesh is not closed");
+        return;
+      }
+      mesh = fit_to_silhouettes(mesh, views, fit.final_resolution, size_t(fit.final_faces));
+      fitted = true;
+    });
+  timed("smooth and subdivide", [&] {
+    if (!fitted) mesh = smooth_and_subdivide(mesh, options.cleanup);
+  });
   const size_t faces = final_face_count(options);
   if (faces > 0 && mesh.faces.size() > faces)
     timed("decimate", [&] {

@@ -1,10 +1,13 @@
 #pragma once
 // ISOMER, the whole reconstruction from a view set to a coloured mesh, as a fixed sequence of stages
 // (paper Sec. 3.2, official `geo_reconstruct`):
-//   1. initial mesh            (initial_mesh.h; or a sphere, or the visual hull: visual_hull.h)
+//   1. initial mesh            (initial_mesh.h, fitted to the masks by silhouette_fit.h; or a sphere,
+//                               or the visual hull: visual_hull.h)
 //   2. coarse optimisation     (coarse_stage.h: fit normals and masks at 512 px)
 //   3. refinement              (refine_stage.h: ExplicitTarget normals, rendered at up to 512 px)
-//   4. smooth and subdivide    (surface_cleanup.h)
+//   3b. silhouette fit         (silhouette_fit.h: only when the optimised mesh disagrees with a mask)
+//   4. smooth and subdivide    (surface_cleanup.h; a mesh the silhouette fit made is left as it is:
+//                               both would thin out its plates)
 //   5. decimation to a face count (geometry/quadric_decimation.h; only when asked, or for textures)
 //   6. colouring               (explicit_target.h: ExplicitTarget + completion, per vertex), or
 //      texture baking          (texture_bake.h: UV atlas, the same colouring per texel)
@@ -21,6 +24,7 @@
 #include "isomer/initial_mesh.h"
 #include "isomer/normal_views.h"
 #include "isomer/refine_stage.h"
+#include "isomer/silhouette_fit.h"
 #include "isomer/surface_cleanup.h"
 #include "isomer/texture_bake.h"
 #include "isomer/visual_hull.h"
@@ -39,6 +43,7 @@ inline constexpr size_t kDefaultTextureFaces = 40000;
 
 struct ReconstructOptions {
   InitialMeshOptions init;
+  SilhouetteFitOptions silhouette_fit;  // applied to the initial mesh (not to the sphere or the hull)
   bool sphere_init = false;  // start the coarse stage from a sphere instead of the initial mesh
   bool visual_hull = false;  // start from the hull carved from the masks (the baseline: with both stages off)
   VisualHullOptions hull;
@@ -71,8 +76,9 @@ struct ReconstructResult {
   TextureBakeReport texture;  // with ColorMode::Texture
 };
 
-// Stage 1: the initial mesh, the sphere or the visual hull, as the options choose.
-Mesh stage_initial_mesh(const ViewSet& views, const ReconstructOptions& options);
+// Stage 1: the initial mesh, the sphere or the visual hull, as the options choose. `fitted` (if given)
+// says whether the initial mesh was fitted to the masks.
+Mesh stage_initial_mesh(const ViewSet& views, const ReconstructOptions& options, bool* fitted = nullptr);
 
 ReconstructResult reconstruct(const ViewSet& views, const ReconstructOptions& options = {});
 

@@ -32,8 +32,8 @@ struct MaskView {
   }
 };
 
-MaskView mask_view(const ViewSet& views, View v) {
-  const Image& rgb = views[v].rgb;
+MaskView mask_view(const ViewSet& views, View v, HullMasks source) {
+  const Image& rgb = source == HullMasks::Rgb ? views[v].rgb : views[v].normals;
   require(rgb.channels == 4 && rgb.width >= 2 && rgb.height >= 2,
           std::string("visual hull: the ") + view_name(v) + " image has no usable alpha mask");
   MaskView m{view_camera(v, rgb.width), rgb.width, rgb.height, std::vector<float>(rgb.pixel_count())};
@@ -48,11 +48,11 @@ MaskView mask_view(const ViewSet& views, View v) {
 
 }  // namespace
 
-ScalarGrid visual_hull_field(const ViewSet& views, int resolution) {
+ScalarGrid visual_hull_field(const ViewSet& views, int resolution, HullMasks source) {
   require(resolution >= 4 && resolution <= 1024,
           "visual hull: resolution " + std::to_string(resolution) + " is outside [4, 1024]");
   std::vector<MaskView> masks;
-  for (View v : kAllViews) masks.push_back(mask_view(views, v));
+  for (View v : kAllViews) masks.push_back(mask_view(views, v, source));
 
   const float voxel = 2.f / float(resolution);
   ScalarGrid grid;

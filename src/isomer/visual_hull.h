@@ -24,9 +24,14 @@ struct VisualHullOptions {
   int target_faces = 50000;  // after decimation; 0 keeps the extracted surface as it is
 };
 
+// Which alpha channel is the mask: the RGB images' (the baseline, as rendered) or the normal maps'
+// (the masks the initial mesh and silhouette_check.h use; the same as the RGB alpha unless the RGB
+// images come without one).
+enum class HullMasks { Rgb, Normals };
+
 // The carved field, (resolution + 2)^3 samples including the outside border layer; positive inside.
 // Throws Error naming the view if a mask is empty.
-ScalarGrid visual_hull_field(const ViewSet& views, int resolution);
+ScalarGrid visual_hull_field(const ViewSet& views, int resolution, HullMasks masks = HullMasks::Rgb);
 
 // Throws Error if a mask is empty or the four masks share no volume.
 Mesh carve_visual_hull(const ViewSet& views, const VisualHullOptions& options = {});

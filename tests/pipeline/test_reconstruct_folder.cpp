@@ -50,8 +50,8 @@ TEST(ReconstructFolder, ReportsStagesAndStepsToItsListener) {
     if (e.kind == ProgressEvent::Kind::Step) EXPECT_TRUE(e.step >= 1 && e.step <= e.steps);
   std::vector<std::string> names;
   for (const StageTiming& t : summary.timings) names.push_back(t.name);
-  EXPECT_EQ(names, (std::vector<std::string>{"load", "initial mesh", "coarse", "refine", "smooth and subdivide",
-                                             "colouring", "write", "previews"}));
+  EXPECT_EQ(names, (std::vector<std::string>{"load", "initial mesh", "coarse", "refine", "silhouette fit",
+                                             "smooth and subdivide", "colouring", "write", "previews"}));
   ASSERT_EQ(summary.written.size(), 3u);
   for (const auto& p : summary.written) EXPECT_TRUE(std::filesystem::exists(p)) << p;
   EXPECT_TRUE(summary.topology.closed_manifold());
