@@ -3,7 +3,7 @@
 // (paper Sec. 3.2, official `geo_reconstruct`):
 //   1. initial mesh            (initial_mesh.h; or a sphere, or the visual hull: visual_hull.h)
 //   2. coarse optimisation     (coarse_stage.h: fit normals and masks at 512 px)
-//   3. refinement              (refine_stage.h: ExplicitTarget normals, rendered at up to 512 px)
+//   3. refinement              (refine_stage.h: view or ExplicitTarget normals, at up to 512 px)
 //   4. smooth and subdivide    (surface_cleanup.h)
 //   5. colouring               (explicit_target.h: ExplicitTarget + completion)
 // Each stage is a function of the mesh so far; reconstruct() runs them in order and times each. The
@@ -37,7 +37,7 @@ struct ReconstructOptions {
   bool run_coarse = true;
   bool run_refine = true;
   CoarseStageOptions coarse;  // with sphere_init, CoarseStageOptions::from_sphere() is the official schedule
-  RefineStageOptions refine;  // refine.use_explicit_target = false: plain multi-view normal loss
+  RefineStageOptions refine;  // refine.target: which normals the refinement fits (refine_stage.h)
   SurfaceCleanupOptions cleanup;
   ColoringOptions coloring;
 };
