@@ -14,8 +14,8 @@ namespace u3d {
 
 // What the refinement pulls each view's rendered normals toward (issue 22, docs/evaluation.md). The
 // multi-view loss is the default: on exact views and under the smooth per-view disagreement of
-// `unique3d perturb --warp/--bend` at two strengths it had the lowest mean CD and highest mean PSNR
-// of the three.
+// `unique3d perturb --warp/--bend/--shading` at two strengths it had the highest mean PSNR and the
+// lowest mean CD of the three (tied with ExplicitTarget WhereViewsDisagree at the strong one).
 enum class RefineTarget {
   MultiView,       // the view's own normal map: the plain multi-view loss
   ExplicitTarget,  // the fused ExplicitTarget normals everywhere (official refine.py)
