@@ -12,6 +12,7 @@ namespace {
 struct PerturbArgs {
   std::string in_dir, out_dir, normal_space = "world";
   std::vector<std::string> rotations, scales;
+  std::string warp, bend, shading;
   PerturbOptions options;
 };
 
@@ -34,7 +35,33 @@ std::pair<View, float> parse_view_value(const std::string& spec, const char* opt
   throw Error(std::string(option) + ": unknown view '" + name + "' in '" + spec + "' (front, right, back, left)");
 }
 
+// "2:64" -> amplitude 2, scale 64 ("" = off).
+SmoothFieldSpec parse_field(const std::string& spec, const char* option, const char* amplitude_name) {
+  if (spec.empty()) return {};
+  const std::string usage = std::string(option) + " expects " + amplitude_name + ":SCALE_PX (e.g. 2:64), got '" + spec + "'";
+  const auto colon = spec.find(':');
+  require(colon != std::string::npos, usage);
+  auto number = [&](const std::string& text) {
+    try {
+      size_t used = 0;
+      const float x = std::stof(text, &used);
+      require(used == text.size() && std::isfinite(x), "");
+      return x;
+    } catch (const std::exception&) {
+      throw Error(usage);
+    }
+  };
+  const SmoothFieldSpec out{number(spec.substr(0, colon)), number(spec.substr(colon + 1))};
+  require(out.amplitude >= 0, std::string(option) + ": the amplitude must not be negative in '" + spec + "'");
+  require(out.scale_px > 0, std::string(option) + ": the scale must be positive in '" + spec + "'");
+  return out;
+}
+
 void run_perturb(PerturbArgs& a) {
+  a.options.displacement = parse_field(a.warp, "--warp", "AMPLITUDE_PX");
+  a.options.bend = parse_field(a.bend, "--bend", "DEGREES");
+  a.options.shading = parse_field(a.shading, "--shading", "AMPLITUDE");
+  require(a.options.shading.amplitude < 1, "--shading: the amplitude must be below 1 (a relative brightness change)");
   for (const auto& spec : a.rotations) {
     auto [v, deg] = parse_view_value(spec, "--rotate-view");
     a.options.warps[int(v)].rotate_deg = deg;
@@ -58,7 +85,16 @@ const CommandRegistration registration{
       sub.add_option("--scale-view", a->scales, "VIEW:FACTOR zoom about the image centre, repeatable");
       sub.add_option("--normal-noise", a->options.normal_noise, "Std. deviation of Gaussian noise per normal component")
           ->check(number_in(0, 10));
-      sub.add_option("--seed", a->options.seed, "Seed of the normal noise")->capture_default_str();
+      sub.add_option("--warp", a->warp,
+                     "AMPLITUDE_PX:SCALE_PX smooth displacement field (RMS pixels, wavelength pixels) of each "
+                     "generated view (right, back, left): parts drawn slightly off where the other views put them");
+      sub.add_option("--bend", a->bend,
+                     "DEGREES:SCALE_PX low-frequency tilt (RMS degrees, wavelength pixels) of every normal map: "
+                     "surfaces predicted flatter or rounder than they are, differently per view");
+      sub.add_option("--shading", a->shading,
+                     "AMPLITUDE:SCALE_PX smooth relative brightness change (RMS, wavelength pixels) of each "
+                     "generated colour view: lighting baked in differently per view");
+      sub.add_option("--seed", a->options.seed, "Seed of the normal noise and of the smooth fields")->capture_default_str();
       sub.add_option("--normal-space", a->normal_space, "Encoding of the input normal maps")
           ->check(CLI::IsMember({"world", "camera"}))->capture_default_str();
       return [a] { run_perturb(*a); };

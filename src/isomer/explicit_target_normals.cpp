@@ -25,7 +25,7 @@ Vec4f sample_bilinear(const Image& image, float x, float y) {
   return out;
 }
 
-std::vector<Vec3f> explicit_target_normals(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& faces,
+ExplicitTargetNormals explicit_target_normals(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& faces,
                                            const std::vector<Vec3f>& vertex_normals,
                                            const std::vector<Image>& normal_maps, const std::vector<Camera>& cameras,
                                            const std::vector<const RasterBuffer*>& rasters,
@@ -36,6 +36,7 @@ std::vector<Vec3f> explicit_target_normals(const std::vector<Vec3f>& positions, 
   const size_t n = positions.size();
   std::vector<Vec3f> color_sum(n, Vec3f::Zero());
   std::vector<float> weight_sum(n, 0.f);
+  std::vector<float> square_sum(n, 0.f);  // sum of w |c|^2, for the spread of the views' samples
   std::vector<char> selected(n);
   std::vector<char> face_seen(faces.size());
   for (size_t view = 0; view < cameras.size(); ++view) {
@@ -61,16 +62,21 @@ std::vector<Vec3f> explicit_target_normals(const std::vector<Vec3f>& positions, 
       const float w = options.view_weights[view] * std::abs(vertex_normals[v].dot(toward)) * sample[3];
       color_sum[v] += w * sample.head<3>();
       weight_sum[v] += w;
+      square_sum[v] += w * sample.head<3>().squaredNorm();
     }
   }
-  std::vector<Vec3f> target(n);
+  ExplicitTargetNormals target{std::vector<Vec3f>(n), std::vector<float>(n, 0.f)};
   for (size_t v = 0; v < n; ++v) {
     if (weight_sum[v] <= options.confidence_threshold) {
-      target[v] = vertex_normals[v];
+      target.normals[v] = vertex_normals[v];
       continue;
     }
-    const Vec3f normal = color_sum[v] / weight_sum[v] * 2.f - Vec3f::Ones();
-    target[v] = normal.norm() > 1e-6f ? normal.normalized() : vertex_normals[v];
+    const Vec3f mean = color_sum[v] / weight_sum[v];
+    const Vec3f normal = mean * 2.f - Vec3f::Ones();
+    target.normals[v] = normal.norm() > 1e-6f ? normal.normalized() : vertex_normals[v];
+    // Weighted variance of the colours, E|c|^2 - |E c|^2; normals are 2c - 1, so twice the RMS.
+    const float variance = std::max(square_sum[v] / weight_sum[v] - mean.squaredNorm(), 0.f);
+    target.disagreement[v] = 2.f * std::sqrt(variance);
   }
   return target;
 }

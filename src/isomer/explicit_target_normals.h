@@ -23,9 +23,17 @@ struct ExplicitTargetOptions {
   float facing_epsilon = 0.05f;
 };
 
+struct ExplicitTargetNormals {
+  std::vector<Vec3f> normals;  // unit target normal per vertex
+  // How much the views that see a vertex disagree about its normal: the weighted RMS distance of
+  // their sampled normals from the weighted mean (about the angle in radians for small spreads);
+  // 0 where one view or none contributes.
+  std::vector<float> disagreement;
+};
+
 // rasters[i]: the mesh rasterized from cameras[i] (visibility). normal_maps: RGBA, RGB = (n + 1) / 2
-// world space, alpha = mask, not premultiplied. Returns unit normals per vertex.
-std::vector<Vec3f> explicit_target_normals(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& faces,
+// world space, alpha = mask, not premultiplied.
+ExplicitTargetNormals explicit_target_normals(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& faces,
                                            const std::vector<Vec3f>& vertex_normals,
                                            const std::vector<Image>& normal_maps, const std::vector<Camera>& cameras,
                                            const std::vector<const RasterBuffer*>& rasters,

@@ -4,7 +4,7 @@
 //   1. initial mesh            (initial_mesh.h, fitted to the masks by silhouette_fit.h; or a sphere,
 //                               or the visual hull: visual_hull.h)
 //   2. coarse optimisation     (coarse_stage.h: fit normals and masks at 512 px)
-//   3. refinement              (refine_stage.h: ExplicitTarget normals, rendered at up to 512 px)
+//   3. refinement              (refine_stage.h: view or ExplicitTarget normals, at up to 512 px)
 //   3b. silhouette fit         (silhouette_fit.h: only when the optimised mesh disagrees with a mask)
 //   4. smooth and subdivide    (surface_cleanup.h; a mesh the silhouette fit made is left as it is:
 //                               both would thin out its plates)
@@ -50,7 +50,7 @@ struct ReconstructOptions {
   bool run_coarse = true;
   bool run_refine = true;
   CoarseStageOptions coarse;  // with sphere_init, CoarseStageOptions::from_sphere() is the official schedule
-  RefineStageOptions refine;  // refine.use_explicit_target = false: plain multi-view normal loss
+  RefineStageOptions refine;  // refine.target: which normals the refinement fits (refine_stage.h)
   SurfaceCleanupOptions cleanup;
   // Final face count: the cleaned-up mesh is decimated to it (quadric, staying closed and manifold)
   // when it has more. 0: kDefaultTextureFaces with ColorMode::Texture, no decimation with vertex colours.

@@ -95,6 +95,14 @@ TEST_F(CliEval, PerturbRejectsBadViewSpecs) {
                                " --scale-view back:big", dir);
   EXPECT_EQ(bad_number.status, 1);
   EXPECT_NE(bad_number.output.find("not a number"), std::string::npos) << bad_number.output;
+  CliRun bad_field = run_cli("perturb " + (dir / "views").string() + " -o " + (dir / "out").string() +
+                              " --warp 2", dir);
+  EXPECT_EQ(bad_field.status, 1);
+  EXPECT_NE(bad_field.output.find("--warp expects AMPLITUDE_PX:SCALE_PX"), std::string::npos) << bad_field.output;
+  CliRun bad_scale = run_cli("perturb " + (dir / "views").string() + " -o " + (dir / "out").string() +
+                              " --bend 3:0", dir);
+  EXPECT_EQ(bad_scale.status, 1);
+  EXPECT_NE(bad_scale.output.find("--bend: the scale must be positive"), std::string::npos) << bad_scale.output;
 }
 
 // A bad file among the inputs fails the run before anything is written: no folder at -o, no early

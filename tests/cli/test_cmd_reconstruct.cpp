@@ -93,7 +93,7 @@ TEST(ReconstructCli, AblationFlagsSelectTheStages) {
   EXPECT_EQ(init.output.find(", coarse "), std::string::npos) << init.output;
   EXPECT_EQ(init.output.find(", refine "), std::string::npos) << init.output;
   const CliResult plain = run_cli(views + " -o " + (dir / "plain.ply").string() +
-                                      " --no-explicit-target --sphere-init --coarse-steps 20 --refine-steps 5",
+                                      " --refine-target multiview --sphere-init --coarse-steps 20 --refine-steps 5",
                                   dir / "plain.txt");
   ASSERT_EQ(plain.status, 0) << plain.output;
   EXPECT_NE(plain.output.find("time: load"), std::string::npos) << plain.output;

@@ -119,6 +119,96 @@ TEST(PerturbViewSet, RollsOneViewWithItsNormalsAndCopiesTheRest) {
   fs::remove_all(out);
 }
 
+TEST(SmoothField, HasTheRequestedRmsAndIsSmoothAndSeeded) {
+  const SmoothField field({2.f, 64.f}, 7), same({2.f, 64.f}, 7), other({2.f, 64.f}, 8);
+  double sum_sq = 0, step_sq = 0;
+  int n = 0;
+  for (int y = 0; y < 512; y += 4)
+    for (int x = 0; x < 512; x += 4, ++n) {
+      const Eigen::Vector2f d = field.at(x, y);
+      sum_sq += d.squaredNorm() / 2;
+      step_sq += (field.at(x + 1, y) - d).squaredNorm() / 2;
+    }
+  EXPECT_NEAR(std::sqrt(sum_sq / n), 2.0, 0.4);
+  // A sinusoid of wavelength 64 changes by at most 2 pi / 64 of its amplitude per pixel.
+  EXPECT_LT(std::sqrt(step_sq / n), 2.0 * 2 * 3.1416 / 64);
+  EXPECT_EQ(field.at(100, 30), same.at(100, 30));
+  EXPECT_NE(field.at(100, 30), other.at(100, 30));
+  EXPECT_EQ(SmoothField({0.f, 0.f}, 7).at(100, 30), Eigen::Vector2f(0, 0));
+  EXPECT_THROW(SmoothField({1.f, 0.f}, 7), Error);
+}
+
+TEST(DisplaceImage, MovesADotByTheFieldAtItsPosition) {
+  const SmoothField field({3.f, 400.f}, 3);  // nearly uniform over the dot's neighbourhood
+  const Image img = single_dot(64, 30, 20);
+  const Image out = displace_image(img, field, false);
+  double mass = 0, cx = 0, cy = 0;
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const float a = out.pixel(x, y)[3];
+      mass += a, cx += a * (x + 0.5), cy += a * (y + 0.5);
+    }
+  ASSERT_GT(mass, 0.5);
+  const Eigen::Vector2f expected = Eigen::Vector2f(30.5f, 20.5f) + field.at(30.5f, 20.5f);
+  EXPECT_GT(field.at(30.5f, 20.5f).norm(), 0.5f);  // the test would not see a field of ~0
+  EXPECT_NEAR(cx / mass, expected.x(), 0.25);
+  EXPECT_NEAR(cy / mass, expected.y(), 0.25);
+}
+
+TEST(BendNormals, TiltsTowardThePicturesRightAndTopByTheFieldsAngle) {
+  const SmoothField tilt({5.f, 300.f}, 11);
+  Image n = flat_normal_map(32, {0, 0, 1});
+  n.pixel(0, 0)[3] = 0;  // background stays untouched
+  bend_normals(n, tilt, {1, 0, 0}, {0, 1, 0});
+  EXPECT_TRUE(normal_at(n, 0, 0).isApprox(Vec3f(0, 0, 1)));
+  for (int p : {5, 17, 28}) {
+    const Eigen::Vector2f t = tilt.at(p + 0.5f, p + 0.5f) * 3.14159265f / 180.f;
+    const Vec3f bent = normal_at(n, p, p);
+    EXPECT_NEAR(bent.x(), std::sin(t.x()), 2e-3f);
+    EXPECT_NEAR(bent.y(), std::sin(t.y()), 2e-3f);
+  }
+}
+
+TEST(ShadeImage, ScalesColourByOnePlusTheFieldAndKeepsAlpha) {
+  const SmoothField gain({0.1f, 100.f}, 5);
+  Image img = flat_normal_map(16, {0, 0, 0});  // RGB 0.5 everywhere, alpha 1
+  shade_image(img, gain);
+  EXPECT_NEAR(img.pixel(3, 9)[0], 0.5f * (1 + gain.at(3.5f, 9.5f).x()), 1e-6f);
+  EXPECT_EQ(img.pixel(3, 9)[3], 1.f);
+}
+
+TEST(PerturbViewSet, SmoothModelsLeaveTheFrontPhotoAndBendEveryNormalMap) {
+  fs::path in = fresh_dir("in_smooth"), out = fresh_dir("out_smooth");
+  Image photo(32, 32, 4, 0.f);
+  for (int y = 4; y < 28; ++y)
+    for (int x = 4; x < 28; ++x) {
+      float* p = photo.pixel(x, y);
+      p[0] = float(x) / 32, p[1] = float(y) / 32, p[2] = 0.5f, p[3] = 1;
+    }
+  for (const char* view : {"front", "right"}) {
+    save_image(photo, in / (std::string(view) + "_rgb.png"));
+    save_image(flat_normal_map(32, {0, 0, 1}), in / (std::string(view) + "_normal.png"), 16);
+  }
+  PerturbOptions o;
+  o.displacement = {2.f, 16.f};
+  o.bend = {4.f, 32.f};
+  o.shading = {0.1f, 32.f};
+  o.seed = 3;
+  perturb_view_set(in, out, o);
+  EXPECT_EQ(load_image_rgba(out / "front_rgb.png").data, load_image_rgba(in / "front_rgb.png").data);
+  EXPECT_NE(load_image_rgba(out / "right_rgb.png").data, load_image_rgba(in / "right_rgb.png").data);
+  for (const char* view : {"front", "right"})
+    EXPECT_NE(load_image_rgba(out / (std::string(view) + "_normal.png")).data,
+              load_image_rgba(in / (std::string(view) + "_normal.png")).data)
+        << view;
+  std::ifstream record(out / "perturbation.json");
+  nlohmann::json j = nlohmann::json::parse(record);
+  EXPECT_EQ(j["displacement_px"]["amplitude"].get<float>(), 2.f);
+  EXPECT_EQ(j["bend_deg"]["scale_px"].get<float>(), 32.f);
+  fs::remove_all(in);
+  fs::remove_all(out);
+}
+
 TEST(PerturbViewSet, MissingOrEmptyFoldersAreErrors) {
   fs::path in = fresh_dir("empty"), out = fresh_dir("out2");
   EXPECT_THROW(perturb_view_set(in / "nope", out, {}), Error);

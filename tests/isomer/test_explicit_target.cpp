@@ -5,6 +5,7 @@
 
 #include "isomer/color_completion.h"
 #include "isomer/explicit_target.h"
+#include "isomer/explicit_target_normals.h"
 #include "core/synthetic_views.h"
 
 namespace u3d {
@@ -53,6 +54,39 @@ TEST(ExplicitTarget, WeightsMatchHandComputedCase) {
   options.cos_power = 1;
   const ExplicitTarget lin = compute_explicit_target(mesh, {&front, &right, &back, &left}, options);
   EXPECT_NEAR(lin.weight[0], 2.f * std::cos(angle) + 0.1f * std::sin(angle), 1e-5f);
+}
+
+// Normals: front and right maps say different things about the tilted square; the fused normal is
+// their weighted mean and the disagreement the weighted RMS distance from it, both by hand.
+TEST(ExplicitTargetNormals, FusedNormalAndDisagreementMatchHandComputedCase) {
+  const float angle = float(M_PI) / 6.f;  // cos 0.866, sin 0.5
+  const Mesh mesh = tilted_square(angle);
+  const Vec3f a(0, 0, 1), b(1, 0, 0);  // front map says +Z, right map says +X
+  auto encoded = [](const Vec3f& n) { return Vec3f((n + Vec3f::Ones()) / 2); };
+  std::vector<Image> maps = {constant_rgba(64, encoded(a), 1.f), constant_rgba(64, encoded(b), 1.f),
+                             constant_rgba(64, encoded(-a), 1.f), constant_rgba(64, encoded(-b), 1.f)};
+  std::vector<Camera> cameras;
+  std::vector<RasterBuffer> rasters;
+  std::vector<const RasterBuffer*> raster_ptrs;
+  for (View v : kAllViews) {
+    cameras.push_back(view_camera(v, 64));
+    rasters.push_back(rasterize(mesh, cameras.back()));
+  }
+  for (const RasterBuffer& r : rasters) raster_ptrs.push_back(&r);
+  const std::vector<Vec3f> vn = vertex_normals(mesh.positions, mesh.faces);
+  const ExplicitTargetNormals t = explicit_target_normals(mesh.positions, mesh.faces, vn, maps, cameras, raster_ptrs);
+  // front: 2.0 * cos 30 = 1.732; right: 0.8 * sin 30 = 0.4; back and left see the square from behind.
+  const float w1 = 2.f * std::cos(angle), w2 = 0.8f * std::sin(angle), w = w1 + w2;
+  const Vec3f mean = (w1 * a + w2 * b) / w;
+  for (size_t v = 0; v < 4; ++v) {
+    EXPECT_TRUE(t.normals[v].isApprox(mean.normalized(), 1e-4f)) << t.normals[v].transpose();
+    // sum w_i |n_i - mean|^2 / w = w1 w2 |a - b|^2 / w^2
+    EXPECT_NEAR(t.disagreement[v], std::sqrt(w1 * w2) / w * (a - b).norm(), 1e-3f);
+  }
+  // Views that agree: no disagreement.
+  maps[1] = maps[0];
+  const ExplicitTargetNormals same = explicit_target_normals(mesh.positions, mesh.faces, vn, maps, cameras, raster_ptrs);
+  for (size_t v = 0; v < 4; ++v) EXPECT_NEAR(same.disagreement[v], 0.f, 1e-3f);
 }
 
 TEST(ExplicitTarget, FacesTurnedAwayAreNotVisible) {

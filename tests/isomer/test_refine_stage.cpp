@@ -1,5 +1,6 @@
-// Stage 2: ExplicitTarget refinement recovers detail the coarse mesh lacks, and resists inconsistent
-// views better than the plain per-view loss.
+// Stage 2: refinement recovers detail the coarse mesh lacks; ExplicitTarget resists a strongly
+// inconsistent view better than the plain per-view loss; fusing only where views disagree reduces to
+// the plain loss when no vertex's views disagree enough.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -63,7 +64,8 @@ TEST(RefineStage, ExplicitTargetBeatsPlainMultiViewLossOnInconsistentViews) {
   }
   const Mesh coarse = plain_ellipsoid();
   RefineStageOptions et = test_options(), plain = test_options();
-  plain.use_explicit_target = false;
+  et.target = RefineTarget::ExplicitTarget;
+  plain.target = RefineTarget::MultiView;
   const Mesh with_et = run_refine_stage(coarse, {maps, cameras}, et);
   const Mesh without = run_refine_stage(coarse, {maps, cameras}, plain);
   const double error_et = mean_normal_error_deg(with_et.positions, with_et.faces, true_maps, cameras);
@@ -75,4 +77,25 @@ TEST(RefineStage, ExplicitTargetBeatsPlainMultiViewLossOnInconsistentViews) {
   printf("true-normal error: ET %.2f deg, plain %.2f deg; chamfer ET %.4f, plain %.4f\n", error_et, error_plain,
          chamfer_et, chamfer_plain);
   EXPECT_LT(error_et, error_plain);
+}
+
+// With a threshold above every possible disagreement no vertex is fused: the targets are the views' own
+// maps, so the run is the multi-view loss's, vertex for vertex.
+TEST(RefineStage, WhereViewsDisagreeAboveEveryDisagreementIsTheMultiViewLoss) {
+  set_progress_quiet(true);
+  const std::vector<Camera> cameras = four_view_cameras(kResolution);
+  const std::vector<Image> maps = render_normal_maps(bulged_ellipsoid(), cameras);
+  const Mesh coarse = plain_ellipsoid();
+  RefineStageOptions plain = test_options(), partly = test_options(), everywhere = test_options();
+  plain.steps = partly.steps = everywhere.steps = 10;
+  plain.target = RefineTarget::MultiView;
+  partly.target = everywhere.target = RefineTarget::WhereViewsDisagree;
+  partly.disagreement_threshold = 2.f;  // normals are unit vectors: no spread reaches 2
+  everywhere.disagreement_threshold = 0.f;
+  const Mesh a = run_refine_stage(coarse, {maps, cameras}, plain);
+  const Mesh b = run_refine_stage(coarse, {maps, cameras}, partly);
+  const Mesh c = run_refine_stage(coarse, {maps, cameras}, everywhere);
+  EXPECT_EQ(a.positions, b.positions);
+  EXPECT_EQ(a.faces, b.faces);
+  EXPECT_NE(a.positions, c.positions);  // and a threshold of 0 does fuse
 }
