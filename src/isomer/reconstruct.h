@@ -42,11 +42,6 @@ struct ReconstructOptions {
   ColoringOptions coloring;
 };
 
-struct StageTiming {
-  std::string name;
-  double seconds = 0.0;
-};
-
 struct ReconstructResult {
   Mesh mesh;
   std::vector<StageTiming> timings;
