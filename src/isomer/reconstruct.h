@@ -63,11 +63,6 @@ struct ReconstructOptions {
 // The face count `options` ask for after the clean-up (0: keep the mesh as it is).
 size_t final_face_count(const ReconstructOptions& options);
 
-struct StageTiming {
-  std::string name;
-  double seconds = 0.0;
-};
-
 struct ReconstructResult {
   Mesh mesh;
   std::vector<StageTiming> timings;

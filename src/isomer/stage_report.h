@@ -1,6 +1,14 @@
 #pragma once
-// What an ISOMER optimisation stage reports: its final loss and edge length, and where its time went.
+// What an ISOMER optimisation stage reports: its final loss and edge length, and where its time went;
+// and the named stage times a run reports (the network stages use them too).
+#include <string>
+
 namespace u3d {
+
+struct StageTiming {
+  std::string name;
+  double seconds = 0.0;
+};
 
 // Seconds spent in each part of the step loop (optimisation_loop.h), summed over the steps.
 struct StageProfile {

@@ -7,11 +7,9 @@
 #include "core/error.h"
 #include "core/view_set.h"
 #include "nn/pipelines/input_photo.h"
-#include "nn/pipelines/unique3d_multiview.h"
-#include "nn/pipelines/unique3d_normal.h"
-#include "nn/pipelines/unique3d_refine.h"
 #include "nn/preprocess/pil_resize.h"
 #include "pipeline/image_stages.h"
+#include "pipeline/model_check.h"
 #include "pipeline/model_folder.h"
 #include "pipeline/tensor_image.h"
 
@@ -265,15 +263,15 @@ GenerateSummary generate(const GenerateRequest& request, ProgressListener* liste
     require(!fully_transparent(*photo),
             "photo " + request.image.string() + " is fully transparent: nothing to reconstruct");
   }
-  const ModelFolder models(request.network.models);
-  if (start <= kPrepare && opaque(*photo)) models.matting();
-  if (start <= kMultiView) nn::MultiViewModel::files(models.img2mvimg());
-  if (start <= kRefine && request.refine)
-    nn::RefineModel::files({models.stable_diffusion(), models.root(), models.ip_adapter()});
-  if (start <= kNormals) {
-    models.upscaler();
-    nn::NormalModel::files(models.image_variations_for_normals(), models.image2normal());
-  }
+  // Their files are there and match the networks (a truncated or wrong checkpoint fails here, not after
+  // minutes of denoising); the photo needs the upscaler when it is small, the views always do.
+  std::vector<Network> networks;
+  if (start <= kPrepare && opaque(*photo)) networks.push_back(Network::kMatting);
+  if (start <= kNormals) networks.push_back(Network::kUpscaler);
+  if (start <= kMultiView) networks.push_back(Network::kMultiView);
+  if (start <= kRefine && request.refine) networks.push_back(Network::kRefine);
+  if (start <= kNormals) networks.push_back(Network::kNormals);
+  require_networks(ModelFolder(request.network.models), networks);
 
   Run run(request);
   run.summary.precision = resolve_precision(request.network);

@@ -11,6 +11,7 @@
 #include "nn/pipelines/matting.h"
 #include "nn/pipelines/unique3d_refine.h"
 #include "nn/pipelines/upscale.h"
+#include "pipeline/model_check.h"
 #include "pipeline/model_folder.h"
 #include "pipeline/tensor_image.h"
 
@@ -25,10 +26,6 @@ void check_image_output(const std::filesystem::path& output) {
           "output " + output.string() + ": unsupported extension (use .png, or .jpg without alpha)");
   const std::filesystem::path dir = output.parent_path().empty() ? "." : output.parent_path();
   require(std::filesystem::is_directory(dir), "output folder " + dir.string() + " does not exist");
-}
-
-nn::RefineCheckpoints refine_checkpoints(const ModelFolder& folder) {
-  return {folder.stable_diffusion(), folder.root(), folder.ip_adapter()};
 }
 
 }  // namespace

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "core/image.h"
-#include "isomer/reconstruct.h"
+#include "isomer/stage_report.h"
 #include "nn/precision_kind.h"
 
 namespace u3d {

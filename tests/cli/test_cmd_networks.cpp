@@ -101,5 +101,33 @@ TEST_F(NetworkCommands, BadInputsAreNamedAndWriteNothing) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+TEST_F(NetworkCommands, DoctorChecksEveryNetworkAndSaysWhatCanRun) {
+  CliResult r = run_cli("doctor" + models(), *dir / "d.log");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("cpu "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("generate: ready"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("FAILED"), std::string::npos) << r.output;
+
+  // Without the refinement's ControlNet and with a truncated normal model: named, with the consequence.
+  const fs::path broken = *dir / "models_doctor";
+  fs::copy(*dir / "models", broken, fs::copy_options::recursive);
+  fs::remove_all(broken / "controlnet-tile");
+  r = run_cli("doctor --quick --models " + broken.string(), *dir / "d2.log");
+  EXPECT_NE(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("controlnet-tile"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("ready with --no-refine only"), std::string::npos) << r.output;
+  const fs::path normal_unet = broken / "image2normal" / "unet_state_dict.pth";
+  fs::resize_file(normal_unet, fs::file_size(normal_unet) / 2);
+  r = run_cli("doctor --quick --models " + broken.string(), *dir / "d3.log");
+  EXPECT_NE(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find(normal_unet.string()), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("generate: not ready"), std::string::npos) << r.output;
+  fs::remove_all(broken);
+
+  r = run_cli("doctor --models " + (*dir / "no_such_folder").string(), *dir / "d4.log");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("no_such_folder"), std::string::npos) << r.output;
+}
+
 }  // namespace
 }  // namespace u3d

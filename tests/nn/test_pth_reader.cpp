@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "core/error.h"
+#include "nn/checkpoint/pickle_writer.h"
 #include "nn/checkpoint/pth_reader.h"
 #include "nn/checkpoint/safetensors.h"
 #include "nn/checkpoint/weights_file.h"
@@ -19,49 +20,7 @@ namespace {
 
 const fs::path kUnetMv = fs::path(UNIQUE3D_TEST_DATA) / "nn" / "unet_mv";
 
-// Assembles pickle bytes the way torch.save lays out a state dict (protocol 2).
-class PickleWriter {
- public:
-  PickleWriter() { bytes_ += "\x80\x02"; }
-  PickleWriter& op(char c) { bytes_ += c; return *this; }
-  PickleWriter& mark() { return op('('); }
-  PickleWriter& global(const std::string& module, const std::string& name) {
-    bytes_ += 'c' + module + '\n' + name + '\n';
-    return *this;
-  }
-  PickleWriter& str(const std::string& s) {
-    op('X');
-    le32(uint32_t(s.size()));
-    bytes_ += s;
-    return *this;
-  }
-  PickleWriter& integer(int64_t v) {
-    op('J');  // BININT
-    le32(uint32_t(int32_t(v)));
-    return *this;
-  }
-  PickleWriter& int_tuple(const std::vector<int64_t>& values) {
-    mark();
-    for (int64_t v : values) integer(v);
-    return op('t');
-  }
-  PickleWriter& empty_ordered_dict() { return global("collections", "OrderedDict").op(')').op('R'); }
-  // _rebuild_tensor_v2(('storage', torch.<type>, key, 'cpu', numel), offset, size, stride, False, OrderedDict())
-  PickleWriter& tensor(const std::string& storage_type, const std::string& key, int64_t numel, int64_t offset,
-                       const std::vector<int64_t>& sizes, const std::vector<int64_t>& strides) {
-    global("torch._utils", "_rebuild_tensor_v2").mark();
-    mark().str("storage").global("torch", storage_type).str(key).str("cpu").integer(numel).op('t').op('Q');
-    integer(offset).int_tuple(sizes).int_tuple(strides).op('\x89').empty_ordered_dict();
-    return op('t').op('R');
-  }
-  std::string finish() { return bytes_ + "."; }
-
- private:
-  void le32(uint32_t v) {
-    for (int i = 0; i < 4; ++i) bytes_ += char((v >> (8 * i)) & 0xff);
-  }
-  std::string bytes_;
-};
+using pickle::PickleWriter;
 
 class PthTest : public ::testing::Test {
  protected:

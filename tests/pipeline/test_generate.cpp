@@ -85,6 +85,54 @@ TEST_F(Generate, Takes16BitPhotos) {
   EXPECT_GT(read_mesh(*dir / "from16.glb").face_count(), 0u);
 }
 
+TEST_F(Generate, TakesGreyscalePhotos) {
+  // One channel, no alpha: the grey is used as RGB and the background is removed as for any opaque photo.
+  const Image rgba = load_image(*dir / "photo.png");
+  Image grey(rgba.width, rgba.height, 1, 1.f);
+  for (int y = 0; y < rgba.height; ++y)
+    for (int x = 0; x < rgba.width; ++x)
+      if (rgba.pixel(x, y)[3] > 0.f) grey.pixel(x, y)[0] = 0.3f;
+  save_image(grey, *dir / "grey.png");
+  GenerateRequest r = request("from_grey.glb");
+  r.image = *dir / "grey.png";
+  r.refine = false;
+  r.keep_intermediates = *dir / "kept_grey";
+  generate(r);
+  EXPECT_GT(read_mesh(*dir / "from_grey.glb").face_count(), 0u);
+  const Image front = load_image(*dir / "kept_grey" / "front.png");
+  EXPECT_EQ(front.channels, 4);
+}
+
+TEST_F(Generate, BrokenCheckpointsAreNamedBeforeAnyStageRuns) {
+  const fs::path models = *dir / "models_broken";
+  fs::copy(*dir / "models", models, fs::copy_options::recursive);
+  const auto expect_error = [&](const fs::path& named) {
+    GenerateRequest r = request("never.glb");
+    r.network.models = models;
+    r.keep_intermediates = *dir / "kept_broken";
+    try {
+      generate(r);
+      ADD_FAILURE() << "no error for a broken " << named;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(named.string()), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(*dir / "never.glb"));
+    EXPECT_FALSE(fs::exists(*dir / "kept_broken" / "front.png")) << "a stage ran";
+  };
+  // The last stage's network, truncated (an interrupted download).
+  const fs::path normal_unet = models / "image2normal" / "unet_state_dict.pth";
+  fs::resize_file(normal_unet, fs::file_size(normal_unet) - 1000);
+  expect_error(normal_unet);
+  fs::copy_file(*dir / "models" / "image2normal" / "unet_state_dict.pth", normal_unet,
+                fs::copy_options::overwrite_existing);
+  // The ControlNet's file holding another network's weights.
+  const fs::path controlnet = models / "controlnet-tile" / "diffusion_pytorch_model.safetensors";
+  fs::copy_file(models / "stable-diffusion-v1-5" / "vae" / "diffusion_pytorch_model.safetensors", controlnet,
+                fs::copy_options::overwrite_existing);
+  expect_error(controlnet);
+  fs::remove_all(models);
+}
+
 TEST_F(Generate, PhotosNoStageCanUseAreNamed) {
   const auto expect_error = [&](const fs::path& photo, const std::string& needle) {
     GenerateRequest r = request("never.glb");

@@ -3,7 +3,9 @@
 #include <caffe2/serialize/inline_container.h>
 
 #include <fstream>
+#include <functional>
 #include <map>
+#include <optional>
 
 #include "core/error.h"
 #include "nn/checkpoint/pickle_reader.h"
@@ -20,6 +22,9 @@ struct StorageRef : pickle::Object {
   c10::ScalarType dtype;
   int64_t numel;
 };
+
+std::string storage_record(const StorageRef& ref) { return "data/" + ref.key; }
+size_t storage_bytes(const StorageRef& ref) { return size_t(ref.numel) * c10::elementSize(ref.dtype); }
 
 struct TensorRef : pickle::Object {
   std::shared_ptr<const StorageRef> storage;
@@ -140,16 +145,21 @@ void check_zip_magic(const std::filesystem::path& path) {
 class RecordReader {
  public:
   explicit RecordReader(const std::filesystem::path& path)
-      : source_(path.string()), reader_(source_), crcs_(zip_record_crcs(path)) {}
+      : source_(path.string()), reader_(source_), records_(zip_records(path)) {}
 
   bool has(const std::string& name) { return reader_.hasRecord(name); }
+  // The record's size from the zip directory, without reading it.
+  std::optional<uint64_t> record_size(const std::string& name) const {
+    auto it = records_.find(name);
+    return it == records_.end() ? std::nullopt : std::optional<uint64_t>(it->second.size);
+  }
 
   // `user` says what needs the record, for errors ("tensor 'conv.weight'").
   std::tuple<at::DataPtr, size_t> read(const std::string& name, const std::string& user) {
     auto [data, size] = reader_.getRecord(name);
-    auto crc = crcs_.find(name);
-    require(crc != crcs_.end(), source_ + ": record " + name + " is not in the zip directory");
-    require(crc32_of(data.get(), size) == crc->second,
+    auto record = records_.find(name);
+    require(record != records_.end(), source_ + ": record " + name + " is not in the zip directory");
+    require(crc32_of(data.get(), size) == record->second.crc,
             source_ + ": " + user + ": record " + name + " fails its CRC check (the file is corrupt)");
     return {std::move(data), size};
   }
@@ -157,7 +167,7 @@ class RecordReader {
  private:
   std::string source_;
   caffe2::serialize::PyTorchStreamReader reader_;
-  std::map<std::string, uint32_t> crcs_;
+  std::map<std::string, ZipRecord> records_;
 };
 
 // Reads each storage record once, so tensors sharing a storage share it here too.
@@ -168,10 +178,10 @@ class StorageCache {
   c10::Storage get(const StorageRef& ref, const std::string& tensor_name) {
     auto it = cache_.find(ref.key);
     if (it != cache_.end()) return it->second;
-    const std::string record = "data/" + ref.key;
+    const std::string record = storage_record(ref);
     require(reader_.has(record), source_ + ": tensor '" + tensor_name + "': missing record " + record);
     auto [data, nbytes] = reader_.read(record, "tensor '" + tensor_name + "'");
-    const size_t expected = size_t(ref.numel) * c10::elementSize(ref.dtype);
+    const size_t expected = storage_bytes(ref);
     require(nbytes == expected, source_ + ": tensor '" + tensor_name + "': record " + record + " holds " +
                                     std::to_string(nbytes) + " bytes, its storage needs " + std::to_string(expected));
     c10::Storage storage(c10::Storage::use_byte_size_t(), nbytes, std::move(data), nullptr, false);
@@ -185,8 +195,8 @@ class StorageCache {
   std::map<std::string, c10::Storage> cache_;
 };
 
-torch::Tensor materialize(const TensorRef& ref, StorageCache& storages, const std::string& source,
-                          const std::string& name) {
+// Checks that the view lies inside its storage.
+void check_view(const TensorRef& ref, const std::string& source, const std::string& name) {
   const auto where = source + ": tensor '" + name + "'";
   int64_t last = ref.offset;  // highest element index the view touches
   bool empty = false;
@@ -198,58 +208,97 @@ torch::Tensor materialize(const TensorRef& ref, StorageCache& storages, const st
   require(ref.offset >= 0 && (empty || last < ref.storage->numel),
           where + ": view (offset " + std::to_string(ref.offset) + ") reaches past its storage of " +
               std::to_string(ref.storage->numel) + " elements");
-  c10::Storage storage = storages.get(*ref.storage, name);
-  return torch::empty({0}, torch::TensorOptions().dtype(ref.storage->dtype))
-      .set_(storage, ref.offset, ref.sizes, ref.strides);
 }
+
+using TensorMaker = std::function<torch::Tensor(const TensorRef&, const std::string& name)>;
 
 // Adds the tensors of `dict` under prefix + key; a nested dict (basicsr's {"params_ema": state dict}) adds
 // its tensors under "<key>.".
-void add_entries(const pickle::Dict& dict, const std::string& prefix, StorageCache& storages,
+void add_entries(const pickle::Dict& dict, const std::string& prefix, const TensorMaker& make,
                  const std::string& source, TensorMap& tensors) {
   for (const auto& [key, value] : dict.items) {
     require(key.is<std::string>(), source + ": state dict key is a " + key.type_name());
     const std::string name = prefix + key.as<std::string>();
     if (value.is<std::shared_ptr<pickle::Dict>>() && prefix.empty()) {
-      add_entries(*value.as<std::shared_ptr<pickle::Dict>>(), name + ".", storages, source, tensors);
+      add_entries(*value.as<std::shared_ptr<pickle::Dict>>(), name + ".", make, source, tensors);
       continue;
     }
     auto ref = value.is<std::shared_ptr<const pickle::Object>>()
                    ? std::dynamic_pointer_cast<const TensorRef>(value.as<std::shared_ptr<const pickle::Object>>())
                    : nullptr;
     require(ref != nullptr, source + ": entry '" + name + "' is a " + value.type_name() + ", not a tensor");
-    tensors[name] = materialize(*ref, storages, source, name);
+    check_view(*ref, source, name);
+    tensors[name] = make(*ref, name);
+  }
+}
+
+// The unpickled state dict of a checkpoint whose zip directory `reader` has read.
+pickle::Value read_state_dict(RecordReader& reader, const std::string& source) {
+  if (reader.has("byteorder")) {
+    auto [data, size] = reader.read("byteorder", "byte order");
+    require(std::string_view(static_cast<const char*>(data.get()), size) == "little",
+            source + ": big-endian checkpoints are not supported");
+  }
+  require(reader.has("data.pkl"), source + ": zip archive without data.pkl (not a torch.save file)");
+  auto [pkl, pkl_size] = reader.read("data.pkl", "the pickled state dict");
+  StateDictHooks hooks(source);
+  pickle::Value root = pickle::unpickle(std::string_view(static_cast<const char*>(pkl.get()), pkl_size), hooks,
+                                        source + ":data.pkl");
+  require(root.is<std::shared_ptr<pickle::Dict>>(),
+          source + ": holds a " + root.type_name() + ", expected a state dict {name: tensor}");
+  return root;
+}
+
+// Runs `body`, turning libtorch's zip errors into an Error naming the file.
+template <class F>
+TensorMap reading_archive(const std::filesystem::path& path, F&& body) {
+  check_zip_magic(path);
+  try {
+    return body(path.string());
+  } catch (const c10::Error& e) {
+    const std::string what = e.what_without_backtrace();
+    throw Error(path.string() + ": corrupt or truncated PyTorch zip archive (" + what.substr(0, what.find('\n')) + ")");
   }
 }
 
 }  // namespace
 
 TensorMap load_pth(const std::filesystem::path& path) {
-  check_zip_magic(path);
-  const std::string source = path.string();
-  try {
+  return reading_archive(path, [&](const std::string& source) {
     RecordReader reader(path);
-    if (reader.has("byteorder")) {
-      auto [data, size] = reader.read("byteorder", "byte order");
-      require(std::string_view(static_cast<const char*>(data.get()), size) == "little",
-              source + ": big-endian checkpoints are not supported");
-    }
-    require(reader.has("data.pkl"), source + ": zip archive without data.pkl (not a torch.save file)");
-    auto [pkl, pkl_size] = reader.read("data.pkl", "the pickled state dict");
-    StateDictHooks hooks(source);
-    const Value root = pickle::unpickle(std::string_view(static_cast<const char*>(pkl.get()), pkl_size), hooks,
-                                        source + ":data.pkl");
-    require(root.is<std::shared_ptr<pickle::Dict>>(),
-            source + ": holds a " + root.type_name() + ", expected a state dict {name: tensor}");
-
+    const pickle::Value root = read_state_dict(reader, source);
     StorageCache storages(reader, source);
     TensorMap tensors;
-    add_entries(*root.as<std::shared_ptr<pickle::Dict>>(), "", storages, source, tensors);
+    add_entries(
+        *root.as<std::shared_ptr<pickle::Dict>>(), "",
+        [&](const TensorRef& ref, const std::string& name) {
+          return torch::empty({0}, torch::TensorOptions().dtype(ref.storage->dtype))
+              .set_(storages.get(*ref.storage, name), ref.offset, ref.sizes, ref.strides);
+        },
+        source, tensors);
     return tensors;
-  } catch (const c10::Error& e) {
-    const std::string what = e.what_without_backtrace();
-    throw Error(source + ": corrupt or truncated PyTorch zip archive (" + what.substr(0, what.find('\n')) + ")");
-  }
+  });
+}
+
+TensorMap inspect_pth(const std::filesystem::path& path) {
+  return reading_archive(path, [&](const std::string& source) {
+    RecordReader reader(path);
+    const pickle::Value root = read_state_dict(reader, source);
+    TensorMap tensors;
+    add_entries(
+        *root.as<std::shared_ptr<pickle::Dict>>(), "",
+        [&](const TensorRef& ref, const std::string& name) {
+          const std::string record = storage_record(*ref.storage);
+          const auto size = reader.record_size(record);
+          require(size.has_value(), source + ": tensor '" + name + "': missing record " + record);
+          require(*size == storage_bytes(*ref.storage),
+                  source + ": tensor '" + name + "': record " + record + " holds " + std::to_string(*size) +
+                      " bytes, its storage needs " + std::to_string(storage_bytes(*ref.storage)));
+          return torch::empty(ref.sizes, torch::TensorOptions().dtype(ref.storage->dtype).device(torch::kMeta));
+        },
+        source, tensors);
+    return tensors;
+  });
 }
 
 }  // namespace u3d::nn

@@ -20,4 +20,10 @@ namespace u3d::nn {
 
 TensorMap load_pth(const std::filesystem::path& path);
 
+// The same file's tensor names, dtypes and shapes as tensors on the meta device (no data), with the
+// structure checked as far as it can be without reading the data: the zip directory (at the end of the
+// file, so a truncated download fails), the pickle, and each storage record's presence and size.
+// CRCs are not checked (that needs the data).
+TensorMap inspect_pth(const std::filesystem::path& path);
+
 }  // namespace u3d::nn

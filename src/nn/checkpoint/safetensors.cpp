@@ -143,30 +143,28 @@ Entry parse_entry(const std::string& name, const nlohmann::json& j, const std::s
   return e;
 }
 
-}  // namespace
-
-TensorMap load_safetensors(const fs::path& path) {
-  const std::string file = path.string();
-  MappedFile map(path);
-  if (map.size() < 8)
-    throw Error("safetensors file " + file + " is truncated: " + std::to_string(map.size()) + " bytes, no header length");
+// The header's entries, checked against the file size, sorted by offset. `head` holds the file's first
+// head_size bytes, which include the header whenever the file does.
+std::vector<Entry> read_header(const std::uint8_t* head, std::uint64_t head_size, std::uint64_t file_size,
+                               const std::string& file, std::uint64_t& data_begin) {
+  if (file_size < 8)
+    throw Error("safetensors file " + file + " is truncated: " + std::to_string(file_size) + " bytes, no header length");
   std::uint64_t header_len = 0;
-  std::memcpy(&header_len, map.data(), 8);
-  if (header_len > kMaxHeaderBytes || header_len > map.size() - 8)
+  std::memcpy(&header_len, head, 8);
+  if (header_len > kMaxHeaderBytes || header_len > file_size - 8 || header_len > head_size - 8)
     throw Error("safetensors file " + file + ": header length " + std::to_string(header_len) + " exceeds the file size " +
-                std::to_string(map.size()) + " (truncated or not a safetensors file)");
+                std::to_string(file_size) + " (truncated or not a safetensors file)");
 
   nlohmann::json header;
   try {
-    header = nlohmann::json::parse(map.data() + 8, map.data() + 8 + header_len);
+    header = nlohmann::json::parse(head + 8, head + 8 + header_len);
   } catch (const nlohmann::json::exception& e) {
     throw Error("safetensors file " + file + ": header is not valid JSON (" + e.what() + ")");
   }
   if (!header.is_object()) throw Error("safetensors file " + file + ": header is not a JSON object");
 
-  const std::uint8_t* data = map.data() + 8 + header_len;
-  const std::uint64_t data_size = map.size() - 8 - header_len;
-
+  data_begin = 8 + header_len;
+  const std::uint64_t data_size = file_size - data_begin;
   std::vector<Entry> entries;
   for (const auto& [name, value] : header.items()) {
     if (name == "__metadata__") continue;  // free-form string map, not a tensor
@@ -178,27 +176,59 @@ TensorMap load_safetensors(const fs::path& path) {
     entries.push_back(std::move(e));
   }
 
-  std::vector<const Entry*> by_offset;
-  for (const auto& e : entries) by_offset.push_back(&e);
-  std::sort(by_offset.begin(), by_offset.end(),
-            [](const Entry* a, const Entry* b) { return a->begin != b->begin ? a->begin < b->begin : a->end < b->end; });
+  std::sort(entries.begin(), entries.end(),
+            [](const Entry& a, const Entry& b) { return a.begin != b.begin ? a.begin < b.begin : a.end < b.end; });
   // Compare each tensor with the one reaching furthest so far, so a long range covering several later
   // ones is caught too. Empty tensors occupy no bytes and cannot overlap.
   const Entry* furthest = nullptr;
-  for (const Entry* cur : by_offset) {
-    if (cur->begin == cur->end) continue;
-    if (furthest && cur->begin < furthest->end)
-      throw Error("safetensors file " + file + ": tensors '" + furthest->name + "' and '" + cur->name +
+  for (const Entry& cur : entries) {
+    if (cur.begin == cur.end) continue;
+    if (furthest && cur.begin < furthest->end)
+      throw Error("safetensors file " + file + ": tensors '" + furthest->name + "' and '" + cur.name +
                   "' overlap in the data section");
-    if (!furthest || cur->end > furthest->end) furthest = cur;
+    if (!furthest || cur.end > furthest->end) furthest = &cur;
   }
+  return entries;
+}
+
+}  // namespace
+
+TensorMap load_safetensors(const fs::path& path) {
+  const std::string file = path.string();
+  MappedFile map(path);
+  std::uint64_t data_begin = 0;
+  const std::vector<Entry> entries = read_header(map.data(), map.size(), map.size(), file, data_begin);
+  const std::uint8_t* data = map.data() + data_begin;
 
   TensorMap out;
-  for (const auto* e : by_offset) {
-    torch::Tensor t = torch::empty(e->shape, torch::TensorOptions().dtype(e->dtype->type));
-    if (e->end > e->begin) std::memcpy(t.data_ptr(), data + e->begin, e->end - e->begin);
-    out.emplace(e->name, std::move(t));
+  for (const Entry& e : entries) {
+    torch::Tensor t = torch::empty(e.shape, torch::TensorOptions().dtype(e.dtype->type));
+    if (e.end > e.begin) std::memcpy(t.data_ptr(), data + e.begin, e.end - e.begin);
+    out.emplace(e.name, std::move(t));
   }
+  return out;
+}
+
+TensorMap inspect_safetensors(const fs::path& path) {
+  const std::string file = path.string();
+  std::ifstream in(path, std::ios::binary);
+  std::error_code ec;
+  if (!in || !fs::is_regular_file(path, ec)) throw Error("cannot open safetensors file " + file);
+  const std::uint64_t file_size = fs::file_size(path);
+  std::vector<std::uint8_t> head(std::min<std::uint64_t>(file_size, 8));
+  in.read(reinterpret_cast<char*>(head.data()), std::streamsize(head.size()));
+  if (file_size >= 8) {
+    std::uint64_t header_len = 0;
+    std::memcpy(&header_len, head.data(), 8);
+    if (header_len <= kMaxHeaderBytes && header_len <= file_size - 8) {
+      head.resize(8 + header_len);
+      in.read(reinterpret_cast<char*>(head.data() + 8), std::streamsize(header_len));
+    }
+  }
+  std::uint64_t data_begin = 0;
+  TensorMap out;
+  for (const Entry& e : read_header(head.data(), head.size(), file_size, file, data_begin))
+    out.emplace(e.name, torch::empty(e.shape, torch::TensorOptions().dtype(e.dtype->type).device(torch::kMeta)));
   return out;
 }
 

@@ -11,6 +11,10 @@ namespace u3d::nn {
 
 TensorMap load_safetensors(const std::filesystem::path& path);
 
+// The file's tensor names, dtypes and shapes as tensors on the meta device (no data), read from the
+// header alone, with the same checks of the header and offsets (a truncated download fails here).
+TensorMap inspect_safetensors(const std::filesystem::path& path);
+
 // Writes a safetensors file (atomically); used by tests and conversion tools.
 void save_safetensors(const TensorMap& tensors, const std::filesystem::path& path);
 

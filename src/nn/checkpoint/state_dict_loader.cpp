@@ -84,15 +84,25 @@ TensorMap take_prefix(TensorMap& weights, const std::string& prefix) {
   return taken;
 }
 
-LoadReport load_state_dict(torch::nn::Module& module, const TensorMap& weights, const LoadPolicy& policy,
-                           const std::string& source) {
-  std::map<std::string, torch::Tensor> targets;
+namespace {
+
+// Which file tensor goes into which module tensor, checked.
+struct LoadPlan {
+  LoadReport report;
+  std::map<std::string, torch::Tensor> targets;                            // module key -> tensor
+  std::map<std::string, std::pair<std::string, torch::Tensor>> sources;  // module key -> (file key, tensor)
+};
+
+LoadPlan plan_load(torch::nn::Module& module, const TensorMap& weights, const LoadPolicy& policy,
+                   const std::string& source) {
+  LoadPlan result;
+  auto& targets = result.targets;
+  auto& report = result.report;
+  auto& plan = result.sources;
   for (const auto& item : module.named_parameters(/*recurse=*/true)) targets[item.key()] = item.value();
   for (const auto& item : module.named_buffers(/*recurse=*/true)) targets[item.key()] = item.value();
 
-  LoadReport report;
   std::vector<std::string> unexpected, missing, bad_shape, bad_dtype, duplicate;
-  std::map<std::string, std::pair<std::string, torch::Tensor>> plan;  // module key -> (file key, tensor)
   for (const auto& [file_key, tensor] : weights) {
     std::string key = file_key;
     if (!targets.count(key)) {
@@ -148,9 +158,23 @@ LoadReport load_state_dict(torch::nn::Module& module, const TensorMap& weights, 
     append_list(os, "tensors given twice", duplicate);
     throw Error(os.str());
   }
+  return result;
+}
 
+}  // namespace
+
+LoadReport check_state_dict(torch::nn::Module& module, const TensorMap& weights, const LoadPolicy& policy,
+                            const std::string& source) {
+  return plan_load(module, weights, policy, source).report;
+}
+
+LoadReport load_state_dict(torch::nn::Module& module, const TensorMap& weights, const LoadPolicy& policy,
+                           const std::string& source) {
+  LoadPlan plan = plan_load(module, weights, policy, source);
+  LoadReport& report = plan.report;
+  auto& targets = plan.targets;
   torch::NoGradGuard no_grad;
-  for (auto& [key, entry] : plan) {
+  for (auto& [key, entry] : plan.sources) {
     torch::Tensor& target = targets.at(key);
     const torch::Tensor& src = entry.second;
     if (src.scalar_type() != target.scalar_type()) {

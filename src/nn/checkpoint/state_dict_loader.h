@@ -60,4 +60,8 @@ TensorMap take_prefix(TensorMap& weights, const std::string& prefix);
 LoadReport load_state_dict(torch::nn::Module& module, const TensorMap& weights, const LoadPolicy& policy,
                            const std::string& source);
 
+// The same checks without copying anything: `weights` may be meta tensors (inspect_weights_file).
+LoadReport check_state_dict(torch::nn::Module& module, const TensorMap& weights, const LoadPolicy& policy,
+                            const std::string& source);
+
 }  // namespace u3d::nn

@@ -30,7 +30,7 @@ std::string read_at(std::ifstream& in, uint64_t offset, uint64_t size, const std
 
 uint32_t crc32_of(const void* data, size_t size) { return crc32_fast(data, size); }
 
-std::map<std::string, uint32_t> zip_record_crcs(const std::filesystem::path& path) {
+std::map<std::string, ZipRecord> zip_records(const std::filesystem::path& path) {
   const std::string source = path.string();
   std::ifstream in(path, std::ios::binary);
   require(bool(in), "cannot open " + source);
@@ -57,19 +57,38 @@ std::map<std::string, uint32_t> zip_record_crcs(const std::filesystem::path& pat
   if (dir_offset > file_size || dir_size > file_size - dir_offset) throw bad("directory outside the file");
 
   const std::string dir = read_at(in, dir_offset, dir_size, source);
-  std::map<std::string, uint32_t> crcs;
+  std::map<std::string, ZipRecord> records;
   size_t pos = 0;
   for (uint64_t i = 0; i < entries; ++i) {
     if (pos + 46 > dir.size() || dir.compare(pos, 4, std::string("PK\x01\x02", 4)) != 0) throw bad("bad entry header");
     const auto crc = uint32_t(le(dir, pos + 16, 4));
     const size_t name_len = le(dir, pos + 28, 2), extra_len = le(dir, pos + 30, 2), comment_len = le(dir, pos + 32, 2);
     if (pos + 46 + name_len > dir.size()) throw bad("entry name outside the directory");
+    if (pos + 46 + name_len + extra_len > dir.size()) throw bad("entry fields outside the directory");
     const std::string name = dir.substr(pos + 46, name_len);
+    uint64_t size = le(dir, pos + 24, 4), compressed = le(dir, pos + 20, 4), offset = le(dir, pos + 42, 4);
+    // zip64: the extra field 0x0001 holds, in this order, each of the three that is 0xffffffff here.
+    for (size_t e = pos + 46 + name_len; e + 4 <= pos + 46 + name_len + extra_len;) {
+      const uint64_t id = le(dir, e, 2), len = le(dir, e + 2, 2);
+      if (e + 4 + len > pos + 46 + name_len + extra_len) throw bad("extra field outside its entry");
+      if (id == 1) {
+        size_t f = e + 4;
+        for (uint64_t* v : {&size, &compressed, &offset}) {
+          if (*v != 0xffffffff) continue;
+          if (f + 8 > e + 4 + len) throw bad("short zip64 extra field");
+          *v = le(dir, f, 8);
+          f += 8;
+        }
+      }
+      e += 4 + len;
+    }
+    if (offset > dir_offset || compressed > dir_offset - offset)
+      throw bad("entry " + name + " lies outside the file (truncated download?)");
     const size_t slash = name.find('/');
-    crcs[slash == std::string::npos ? name : name.substr(slash + 1)] = crc;
+    records[slash == std::string::npos ? name : name.substr(slash + 1)] = {crc, size};
     pos += 46 + name_len + extra_len + comment_len;
   }
-  return crcs;
+  return records;
 }
 
 }  // namespace u3d::nn

@@ -58,8 +58,9 @@ torch::Tensor IpAdapterImpl::context(const torch::Tensor& text_embeddings, const
   return torch::cat({text_embeddings, image_proj->forward(image_embeds).to(text_embeddings.scalar_type())}, 1);
 }
 
-IpAdapter load_ip_adapter(UNet2DConditionModelImpl& unet, const std::filesystem::path& file, double scale) {
-  const TensorMap weights = load_weights_file(file);
+IpAdapter load_ip_adapter(UNet2DConditionModelImpl& unet, const std::filesystem::path& file, double scale,
+                          const CheckpointReader& reader) {
+  const TensorMap weights = reader.read(file);
   const auto proj = weights.find("image_proj.proj.weight");
   const auto norm = weights.find("image_proj.norm.weight");
   if (proj == weights.end() || norm == weights.end() || proj->second.dim() != 2 || norm->second.dim() != 1 ||
@@ -72,7 +73,7 @@ IpAdapter load_ip_adapter(UNet2DConditionModelImpl& unet, const std::filesystem:
                 " entries, the UNet's cross-attention dim is " + std::to_string(unet.config.cross_attention_dim[0]));
   IpAdapter adapter(unet, proj->second.size(1), proj->second.size(0) / cross_dim, scale,
                     torch::TensorOptions().device(unet.conv_in->weight.device()));
-  load_state_dict(*adapter, weights, {}, file.string());
+  reader.apply(*adapter, weights, {}, file.string());
   return adapter;
 }
 

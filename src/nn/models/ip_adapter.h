@@ -16,6 +16,7 @@
 #include <memory>
 #include <vector>
 
+#include "nn/checkpoint/checkpoint_reader.h"
 #include "nn/layers/ip_adapter_attention.h"
 #include "nn/layers/layers.h"
 #include "nn/models/unet.h"
@@ -53,7 +54,9 @@ class IpAdapterImpl : public torch::nn::Module {
 TORCH_MODULE(IpAdapter);
 
 // Reads an adapter file in the original layout (safetensors or torch zip), sizes the adapter from its
-// image_proj tensors, installs it on `unet` and loads it strictly (an Error names the file and tensor).
-IpAdapter load_ip_adapter(UNet2DConditionModelImpl& unet, const std::filesystem::path& file, double scale);
+// image_proj tensors, installs it on `unet` and loads it strictly (an Error names the file and tensor), or
+// only checks it with a checking `reader` (the adapter is built on the UNet's device).
+IpAdapter load_ip_adapter(UNet2DConditionModelImpl& unet, const std::filesystem::path& file, double scale,
+                          const CheckpointReader& reader = {});
 
 }  // namespace u3d::nn

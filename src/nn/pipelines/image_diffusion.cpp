@@ -33,7 +33,8 @@ std::vector<std::filesystem::path> conditioning_model_files(const DiffusersFolde
           folder.preprocessor_config(),             folder.scheduler_config()};
 }
 
-ConditioningModels load_conditioning_models(const DiffusersFolder& folder, Precision precision) {
+ConditioningModels load_conditioning_models(const DiffusersFolder& folder, Precision precision,
+                                            const CheckpointReader& reader) {
   check_precision_supported(precision, torch::kCPU);
   const auto clip_config = folder.component_config("image_encoder");
   const auto clip_weights = folder.component_weights("image_encoder");
@@ -48,11 +49,11 @@ ConditioningModels load_conditioning_models(const DiffusersFolder& folder, Preci
   m.scheduler = make_scheduler(parse_scheduler_config(read_json_file(scheduler_config), scheduler_config.string()),
                                SchedulerKind::EulerAncestral);
   m.image_encoder = ClipVisionModelWithProjection(
-      ClipVisionConfig::from_json(read_json_file(clip_config), clip_config.string()), torch::TensorOptions());
-  load_state_dict(*m.image_encoder, load_weights_file(clip_weights), clip_policy(), clip_weights.string());
+      ClipVisionConfig::from_json(read_json_file(clip_config), clip_config.string()), reader.options());
+  reader.load(*m.image_encoder, clip_weights, clip_policy());
   m.vae = AutoencoderKL(AutoencoderKLConfig::from_json(read_json_file(vae_config), vae_config.string()),
-                        torch::TensorOptions());
-  load_state_dict(*m.vae, load_weights_file(vae_weights), {}, vae_weights.string());
+                        reader.options());
+  reader.load(*m.vae, vae_weights);
   set_precision(*m.image_encoder, precision);
   set_precision(*m.vae, precision);
   return m;

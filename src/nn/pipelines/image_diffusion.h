@@ -18,6 +18,7 @@
 #include <memory>
 #include <vector>
 
+#include "nn/checkpoint/checkpoint_reader.h"
 #include "nn/checkpoint/diffusers_folder.h"
 #include "nn/checkpoint/tensor_map.h"
 #include "nn/models/clip_vision.h"
@@ -50,8 +51,10 @@ struct ConditioningModels {
 };
 
 // Checks that `precision` runs on the CPU and that every file is in `folder` before reading any weights
-// (an Error names the problem or the first missing file), then loads and converts to `precision`.
-ConditioningModels load_conditioning_models(const DiffusersFolder& folder, Precision precision);
+// (an Error names the problem or the first missing file), then loads (or checks, with `reader`) and
+// converts to `precision`.
+ConditioningModels load_conditioning_models(const DiffusersFolder& folder, Precision precision,
+                                            const CheckpointReader& reader = {});
 // The files load_conditioning_models reads, checked to exist; reads nothing.
 std::vector<std::filesystem::path> conditioning_model_files(const DiffusersFolder& folder);
 

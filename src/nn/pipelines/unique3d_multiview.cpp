@@ -21,20 +21,21 @@ std::vector<std::filesystem::path> MultiViewModel::files(const std::filesystem::
   return files;
 }
 
-std::unique_ptr<MultiViewModel> MultiViewModel::load(const std::filesystem::path& root, Precision precision) {
+std::unique_ptr<MultiViewModel> MultiViewModel::load(const std::filesystem::path& root, Precision precision,
+                                                     const CheckpointReader& reader) {
   const DiffusersFolder folder(root);
   // The UNet's files are checked before load_conditioning_models reads any weights.
   const auto unet_config = folder.component_config("unet");
   const auto unet_weights = folder.file("unet_state_dict.pth");
 
   auto m = std::make_unique<MultiViewModel>();
-  m->parts = load_conditioning_models(folder, precision);
+  m->parts = load_conditioning_models(folder, precision, reader);
   // image2mvimage.yaml: cat_condition (conv_in takes noisy and condition latents) and 8 class labels.
   UNetConfig config = UNetConfig::from_json(read_json_file(unet_config), unet_config.string());
   config.in_channels = 2 * config.out_channels;
   config.num_class_embeds = 8;
-  m->unet = UNet2DConditionModel(config, torch::TensorOptions());
-  load_state_dict(*m->unet, load_weights_file(unet_weights), {}, unet_weights.string());
+  m->unet = UNet2DConditionModel(config, reader.options());
+  reader.load(*m->unet, unet_weights);
   set_attention_processors(*m->unet, self_attention_only(std::make_shared<MultiViewAttentionProcessor>(kViews)));
   set_precision(*m->unet, precision);
   return m;

@@ -12,6 +12,7 @@
 #include <memory>
 #include <vector>
 
+#include "nn/checkpoint/checkpoint_reader.h"
 #include "nn/checkpoint/tensor_map.h"
 #include "nn/models/unet.h"
 #include "nn/pipelines/image_diffusion.h"
@@ -29,8 +30,10 @@ struct MultiViewSettings {
 class MultiViewModel {
  public:
   // Checks that every file the stage needs is there (an Error names the first missing one and where the
-  // folder comes from) before reading any weights, then loads and converts to `precision`.
-  static std::unique_ptr<MultiViewModel> load(const std::filesystem::path& folder, Precision precision);
+  // folder comes from) before reading any weights, then loads and converts to `precision`. With a checking
+  // `reader` the model is built on the meta device, only to check the checkpoints.
+  static std::unique_ptr<MultiViewModel> load(const std::filesystem::path& folder, Precision precision,
+                                              const CheckpointReader& reader = {});
   // The files load() reads, checked to exist (an Error names the first missing one); reads nothing.
   static std::vector<std::filesystem::path> files(const std::filesystem::path& folder);
 

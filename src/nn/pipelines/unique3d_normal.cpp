@@ -18,7 +18,8 @@ std::vector<std::filesystem::path> NormalModel::files(const std::filesystem::pat
 }
 
 std::unique_ptr<NormalModel> NormalModel::load(const std::filesystem::path& image_variations,
-                                               const std::filesystem::path& image2normal, Precision precision) {
+                                               const std::filesystem::path& image2normal, Precision precision,
+                                               const CheckpointReader& reader) {
   const DiffusersFolder base(image_variations);
   const DiffusersFolder unique3d(image2normal);
   const auto unet_config = base.component_config("unet");
@@ -26,17 +27,17 @@ std::unique_ptr<NormalModel> NormalModel::load(const std::filesystem::path& imag
   const auto unet_weights = unique3d.file("unet_state_dict.pth");
 
   auto m = std::make_unique<NormalModel>();
-  m->parts = load_conditioning_models(base, precision);
+  m->parts = load_conditioning_models(base, precision, reader);
   m->unet = std::make_unique<ReferenceUNet>(UNetConfig::from_json(read_json_file(unet_config), unet_config.string()),
-                                            torch::TensorOptions());
-  TensorMap weights = load_weights_file(unet_weights);
+                                            reader.options());
+  TensorMap weights = reader.read(unet_weights);
   TensorMap reference = take_prefix(weights, kRefUnetPrefix);
   // Unique3D loads with strict=False; the one part its file may lack is the reference UNet.
-  load_state_dict(*m->unet->unet, weights, LoadPolicy{{std::string(kRefUnetPrefix) + "*"}, {}}, unet_weights.string());
+  reader.apply(*m->unet->unet, weights, LoadPolicy{{std::string(kRefUnetPrefix) + "*"}, {}}, unet_weights.string());
   if (reference.empty())
-    load_state_dict(*m->unet->reference, load_weights_file(base_unet_weights), {}, base_unet_weights.string());
+    reader.load(*m->unet->reference, base_unet_weights);
   else
-    load_state_dict(*m->unet->reference, reference, {}, unet_weights.string() + " (" + kRefUnetPrefix + "*)");
+    reader.apply(*m->unet->reference, reference, {}, unet_weights.string() + " (" + kRefUnetPrefix + "*)");
   set_precision(*m->unet->unet, precision);  // the reference UNet is registered inside it
   return m;
 }

@@ -13,6 +13,7 @@
 #include <memory>
 #include <vector>
 
+#include "nn/checkpoint/checkpoint_reader.h"
 #include "nn/checkpoint/tensor_map.h"
 #include "nn/models/unet_reference.h"
 #include "nn/pipelines/image_diffusion.h"
@@ -30,9 +31,11 @@ struct NormalSettings {
 class NormalModel {
  public:
   // image_variations: the sd-image-variations diffusers folder; image2normal: the official
-  // ckpt/image2normal folder. Every file is checked before any weights are read.
+  // ckpt/image2normal folder. Every file is checked before any weights are read. With a checking `reader`
+  // the model is built on the meta device, only to check the checkpoints.
   static std::unique_ptr<NormalModel> load(const std::filesystem::path& image_variations,
-                                           const std::filesystem::path& image2normal, Precision precision);
+                                           const std::filesystem::path& image2normal, Precision precision,
+                                           const CheckpointReader& reader = {});
   // The files load() reads, checked to exist (an Error names the first missing one); reads nothing.
   static std::vector<std::filesystem::path> files(const std::filesystem::path& image_variations,
                                                   const std::filesystem::path& image2normal);

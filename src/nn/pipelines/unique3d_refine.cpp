@@ -69,7 +69,8 @@ std::vector<std::filesystem::path> RefineModel::files(const RefineCheckpoints& c
   return RefineFiles(checkpoints).all();
 }
 
-std::unique_ptr<RefineModel> RefineModel::load(const RefineCheckpoints& c, Precision precision) {
+std::unique_ptr<RefineModel> RefineModel::load(const RefineCheckpoints& c, Precision precision,
+                                               const CheckpointReader& reader) {
   check_precision_supported(precision, torch::kCPU);
   const RefineFiles f(c);  // every file is checked before any weights are read
   const auto& [unet_config, unet_weights, vae_config, vae_weights, text_config, text_weights, merges, processor_config,
@@ -77,26 +78,25 @@ std::unique_ptr<RefineModel> RefineModel::load(const RefineCheckpoints& c, Preci
                adapter_weights] = f;
 
   auto m = std::make_unique<RefineModel>();
-  const torch::TensorOptions cpu;
+  const torch::TensorOptions cpu = reader.options();
   m->tokenizer = std::make_unique<ClipTokenizer>(ClipTokenizer::load(merges));
   m->feature_extractor = std::make_unique<ClipImageProcessor>(
       ClipImageProcessorConfig::from_json(read_json_file(processor_config), processor_config.string()));
   m->scheduler = make_scheduler(parse_scheduler_config(read_json_file(scheduler_config), scheduler_config.string()),
                                 SchedulerKind::EulerAncestral);
   m->text_encoder = ClipTextModel(ClipTextConfig::from_json(read_json_file(text_config), text_config.string()), cpu);
-  load_state_dict(*m->text_encoder, load_weights_file(text_weights), clip_policy(), text_weights.string());
+  reader.load(*m->text_encoder, text_weights, clip_policy());
   m->image_encoder = ClipVisionModelWithProjection(
       ClipVisionConfig::from_json(read_json_file(image_encoder_config), image_encoder_config.string()), cpu);
-  load_state_dict(*m->image_encoder, load_weights_file(image_encoder_weights), clip_policy(),
-                  image_encoder_weights.string());
+  reader.load(*m->image_encoder, image_encoder_weights, clip_policy());
   m->unet = UNet2DConditionModel(UNetConfig::from_json(read_json_file(unet_config), unet_config.string()), cpu);
-  load_state_dict(*m->unet, load_weights_file(unet_weights), {}, unet_weights.string());
-  m->ip_adapter = load_ip_adapter(*m->unet, adapter_weights, 1.0);
+  reader.load(*m->unet, unet_weights);
+  m->ip_adapter = load_ip_adapter(*m->unet, adapter_weights, 1.0, reader);
   m->controlnet = ControlNetModel(
       ControlNetConfig::from_json(read_json_file(controlnet_config), controlnet_config.string()), cpu);
-  load_state_dict(*m->controlnet, load_weights_file(controlnet_weights), {}, controlnet_weights.string());
+  reader.load(*m->controlnet, controlnet_weights);
   m->vae = AutoencoderKL(AutoencoderKLConfig::from_json(read_json_file(vae_config), vae_config.string()), cpu);
-  load_state_dict(*m->vae, load_weights_file(vae_weights), {}, vae_weights.string());
+  reader.load(*m->vae, vae_weights);
 
   for (torch::nn::Module* model : std::initializer_list<torch::nn::Module*>{
            m->text_encoder.get(), m->image_encoder.get(), m->unet.get(), m->ip_adapter.get(), m->controlnet.get(),

@@ -30,6 +30,7 @@
 #include <string>
 #include <vector>
 
+#include "nn/checkpoint/checkpoint_reader.h"
 #include "nn/checkpoint/tensor_map.h"
 #include "nn/models/clip_text.h"
 #include "nn/models/clip_vision.h"
@@ -65,8 +66,10 @@ struct RefineSettings {
 class RefineModel {
  public:
   // Checks that every file is there (an Error names the first missing one and where it comes from)
-  // before reading any weights, then loads and converts to `precision`.
-  static std::unique_ptr<RefineModel> load(const RefineCheckpoints& checkpoints, Precision precision);
+  // before reading any weights, then loads and converts to `precision`. With a checking `reader` the
+  // model is built on the meta device, only to check the checkpoints.
+  static std::unique_ptr<RefineModel> load(const RefineCheckpoints& checkpoints, Precision precision,
+                                           const CheckpointReader& reader = {});
   // The files load() reads, checked to exist (an Error names the first missing one); reads nothing.
   static std::vector<std::filesystem::path> files(const RefineCheckpoints& checkpoints);
 
