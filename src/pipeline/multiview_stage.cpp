@@ -4,6 +4,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/view_set.h"
 #include "nn/pipelines/unique3d_multiview.h"
 #include "nn/preprocess/pil_resize.h"
 #include "pipeline/model_folder.h"
