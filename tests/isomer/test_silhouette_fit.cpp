@@ -7,11 +7,11 @@
 #include <utility>
 
 #include "core/error.h"
+#include "core/synthetic_views.h"
 #include "geometry/mesh_topology.h"
 #include "isomer/reconstruct.h"
 #include "isomer/silhouette_check.h"
 #include "isomer/silhouette_fit.h"
-#include "synthetic_views.h"
 
 namespace u3d {
 namespace {
