@@ -40,7 +40,8 @@ TEST(Attention, FeedForwardInTokenBlocksMatchesWholeSequence) {
   randomize_parameters(*ff, 0.5);
   const torch::Tensor x = torch::randn({2, 2 * 4096 + 100, 8});
   const torch::Tensor whole = ff->proj_out->forward(ff->geglu->forward(x));
-  EXPECT_LE((ff->forward(x) - whole).abs().max().item<double>(), 1e-6);
+  // fp32 sums in a different order for the blocks than for the whole (the kernels block by shape).
+  EXPECT_LE((ff->forward(x) - whole).abs().max().item<double>(), 2e-5);
 }
 
 TEST(Attention, MultiViewJoinsConsecutiveBatchEntries) {
