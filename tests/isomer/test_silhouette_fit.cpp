@@ -8,6 +8,7 @@
 
 #include "core/error.h"
 #include "core/synthetic_views.h"
+#include "geometry/test_shapes.h"
 #include "geometry/mesh_topology.h"
 #include "isomer/reconstruct.h"
 #include "isomer/silhouette_check.h"
@@ -17,19 +18,7 @@ namespace u3d {
 namespace {
 
 using Box = std::pair<Vec3f, Vec3f>;
-
-// Closed box mesh [lo, hi] with outward faces.
-Mesh box_mesh(const Vec3f& lo, const Vec3f& hi) {
-  Mesh m;
-  for (int i = 0; i < 8; ++i)
-    m.positions.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
-  const int quads[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
-  for (const auto& q : quads) {
-    m.faces.emplace_back(q[0], q[1], q[2]);
-    m.faces.emplace_back(q[0], q[2], q[3]);
-  }
-  return m;
-}
+using test::box_mesh;
 
 // The four exact views of a union of axis-aligned boxes: a pixel is foreground where the view's ray
 // passes through a box (normals: the view direction, all that matters here is the masks).
