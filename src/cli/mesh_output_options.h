@@ -11,7 +11,7 @@
 namespace u3d::cli {
 
 struct MeshOutputArgs {
-  std::string colour = "vertex";
+  std::string colour = "texture";
   std::string texture_format = "png";
   CLI::Option* texture_size = nullptr;
   CLI::Option* texture_format_option = nullptr;

@@ -55,7 +55,7 @@ struct ReconstructOptions {
   // Final face count: the cleaned-up mesh is decimated to it (quadric, staying closed and manifold)
   // when it has more. 0: kDefaultTextureFaces with ColorMode::Texture, no decimation with vertex colours.
   size_t faces = 0;
-  ColorMode color_mode = ColorMode::Vertex;
+  ColorMode color_mode = ColorMode::Texture;
   ColoringOptions coloring;  // weights, masks and threshold of both modes
   TextureBakeOptions texture;
 };

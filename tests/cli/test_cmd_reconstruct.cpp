@@ -1,4 +1,4 @@
-// `unique3d reconstruct` end to end: a sphere's views give a closed coloured mesh matching the
+// `unique3d reconstruct` end to end: a sphere's views give a closed textured mesh matching the
 // silhouettes; every bad input gives a clear message, a non-zero exit and no output file.
 #include <gtest/gtest.h>
 
@@ -12,6 +12,7 @@
 
 #include "geometry/mesh_topology.h"
 #include "io/mesh_io.h"
+#include "isomer/reconstruct.h"
 #include "core/synthetic_views.h"
 
 namespace u3d {
@@ -33,7 +34,15 @@ CliResult run_cli(const std::string& args, const std::filesystem::path& log) {
   return r;
 }
 
-TEST(ReconstructCli, SphereGivesClosedColoredMeshMatchingTheSilhouettes) {
+// A textured result splits its vertices at chart borders: as a surface (vertices merged at equal
+// positions) it is closed and manifold.
+void expect_closed_textured(const Mesh& mesh) {
+  EXPECT_TRUE(mesh.has_texture());
+  EXPECT_FALSE(mesh.has_colors());
+  EXPECT_TRUE(surface_topology(mesh).closed_manifold()) << surface_topology(mesh).summary();
+}
+
+TEST(ReconstructCli, SphereGivesClosedTexturedMeshMatchingTheSilhouettes) {
   const auto dir = testing::fresh_temp_dir("cli_sphere");
   testing::write_view_set(testing::sphere_views(0.6f, 192), dir / "views");
   const auto out = dir / "sphere.glb";
@@ -44,9 +53,7 @@ TEST(ReconstructCli, SphereGivesClosedColoredMeshMatchingTheSilhouettes) {
   ASSERT_TRUE(std::filesystem::exists(out));
   EXPECT_TRUE(std::filesystem::exists(dir / "sphere_views.png"));
   EXPECT_TRUE(std::filesystem::exists(dir / "sphere_turntable.png"));
-  const Mesh mesh = read_mesh(out);
-  EXPECT_TRUE(mesh.has_colors());
-  EXPECT_TRUE(mesh_topology(mesh).closed_manifold());
+  expect_closed_textured(read_mesh(out));
   std::smatch m;
   ASSERT_TRUE(std::regex_search(r.output, m,
                                 std::regex("silhouette IoU: front ([0-9.]+), right ([0-9.]+), back ([0-9.]+), left ([0-9.]+)")))
@@ -64,8 +71,8 @@ std::array<double, 4> printed_iou(const std::string& output) {
   return iou;
 }
 
-// The full default pipeline (initial mesh, coarse, ExplicitTarget refinement, clean-up, colouring)
-// once, on the bundled example: about a minute.
+// The full default pipeline (initial mesh, coarse, refinement, clean-up, decimation to 40k faces, a
+// 2048 texture) once, on the bundled example: about half a minute.
 TEST(ReconstructCli, BundledExampleFullPipelineCoversTheMasks) {
   const auto dir = testing::fresh_temp_dir("cli_spot");
   const auto out = dir / "spot.glb";
@@ -74,9 +81,11 @@ TEST(ReconstructCli, BundledExampleFullPipelineCoversTheMasks) {
                               dir / "log.txt");
   ASSERT_EQ(r.status, 0) << r.output;
   const Mesh mesh = read_mesh(out);
-  EXPECT_TRUE(mesh.has_colors());
-  EXPECT_TRUE(mesh_topology(mesh).closed_manifold()) << mesh_topology(mesh).summary();
-  for (const char* stage : {"initial mesh ", "coarse ", "refine ", "smooth and subdivide ", "colouring "})
+  expect_closed_textured(mesh);
+  EXPECT_LE(mesh.face_count(), kDefaultTextureFaces);
+  EXPECT_GE(mesh.face_count(), kDefaultTextureFaces * 99 / 100);
+  EXPECT_EQ(mesh.materials[0].texture.width, 2048);
+  for (const char* stage : {"initial mesh ", "coarse ", "refine ", "smooth and subdivide ", "decimate ", "texture "})
     EXPECT_NE(r.output.find(std::string(", ") + stage), std::string::npos) << stage << r.output;
   EXPECT_NE(r.output.find(", 0 unreachable"), std::string::npos) << r.output;
   for (double v : printed_iou(r.output)) EXPECT_GE(v, 0.9) << r.output;
@@ -105,7 +114,7 @@ TEST(ReconstructCli, AblationFlagsSelectTheStages) {
   EXPECT_FALSE(std::filesystem::exists(dir / "x.ply"));
 }
 
-// The visual-hull baseline of the object benchmark: carve, clean up, colour; no optimisation.
+// The visual-hull baseline of the object benchmark: carve, clean up, texture; no optimisation.
 TEST(ReconstructCli, VisualHullReplacesInitialMeshAndOptimisation) {
   const auto dir = testing::fresh_temp_dir("cli_hull");
   testing::write_view_set(testing::sphere_views(0.6f, 96), dir / "views");
@@ -117,9 +126,7 @@ TEST(ReconstructCli, VisualHullReplacesInitialMeshAndOptimisation) {
   EXPECT_NE(hull.output.find(", visual hull "), std::string::npos) << hull.output;
   for (const char* stage : {", initial mesh ", ", coarse ", ", refine "})
     EXPECT_EQ(hull.output.find(stage), std::string::npos) << stage << hull.output;
-  const Mesh mesh = read_mesh(out);
-  EXPECT_TRUE(mesh.has_colors());
-  EXPECT_TRUE(mesh_topology(mesh).closed_manifold()) << mesh_topology(mesh).summary();
+  expect_closed_textured(read_mesh(out));
   for (double v : printed_iou(hull.output)) EXPECT_GE(v, 0.95) << hull.output;
 
   const CliResult clash = run_cli(views + " -o " + (dir / "x.ply").string() + " --visual-hull --init-only",
@@ -162,7 +169,7 @@ TEST(ReconstructCli, BadInputFailsCleanlyAndWritesNothing) {
 }
 
 // --faces hits its count within 1 % and keeps the surface closed and manifold, with vertex colours
-// and with a texture; textures go into the GLB or beside an OBJ (PNG or JPEG).
+// and with a texture (the default); textures go into the GLB or beside an OBJ (PNG or JPEG).
 TEST(ReconstructCli, FacesAndTextureOptionsShapeTheOutput) {
   const auto dir = testing::fresh_temp_dir("cli_texture");
   testing::write_view_set(testing::sphere_views(0.6f, 128), dir / "views");
@@ -172,7 +179,7 @@ TEST(ReconstructCli, FacesAndTextureOptionsShapeTheOutput) {
     EXPECT_GE(mesh.face_count(), faces - faces / 100);
     EXPECT_TRUE(surface_topology(mesh).closed_manifold()) << surface_topology(mesh).summary();
   };
-  const CliResult vertex = run_cli(views + " -o " + (dir / "v.glb").string() + " --faces 3000", dir / "v.txt");
+  const CliResult vertex = run_cli(views + " -o " + (dir / "v.glb").string() + " --colour vertex --faces 3000", dir / "v.txt");
   ASSERT_EQ(vertex.status, 0) << vertex.output;
   EXPECT_NE(vertex.output.find(", decimate "), std::string::npos) << vertex.output;
   const Mesh v = read_mesh(dir / "v.glb");
@@ -180,8 +187,8 @@ TEST(ReconstructCli, FacesAndTextureOptionsShapeTheOutput) {
   EXPECT_FALSE(v.has_texture());
   expect_faces(v, 3000);
 
-  const CliResult texture = run_cli(views + " -o " + (dir / "t.glb").string() +
-                                        " --colour texture --faces 2000 --texture-size 256", dir / "t.txt");
+  const CliResult texture = run_cli(views + " -o " + (dir / "t.glb").string() + " --faces 2000 --texture-size 256",
+                                    dir / "t.txt");
   ASSERT_EQ(texture.status, 0) << texture.output;
   EXPECT_NE(texture.output.find("texture: 256x256, "), std::string::npos) << texture.output;
   const Mesh t = read_mesh(dir / "t.glb");
@@ -189,8 +196,9 @@ TEST(ReconstructCli, FacesAndTextureOptionsShapeTheOutput) {
   EXPECT_FALSE(t.has_colors());
   EXPECT_EQ(t.materials[0].texture.width, 256);
   expect_faces(t, 2000);
-  if (std::system("command -v node > /dev/null 2>&1") == 0)  // the Khronos glTF validator (tests/io too)
+  if (std::system("command -v node > /dev/null 2>&1") == 0) {  // the Khronos glTF validator (tests/io too)
     EXPECT_EQ(std::system(("node " UNIQUE3D_SOURCE_DIR "/tools/validate_gltf.mjs " + (dir / "t.glb").string()).c_str()), 0);
+  }
 
   const CliResult obj = run_cli(views + " -o " + (dir / "t.obj").string() +
                                     " --colour texture --faces 2000 --texture-size 128 --texture-format jpg",
@@ -210,8 +218,8 @@ TEST(ReconstructCli, BadFaceAndTextureOptionsFailBeforeWork) {
       {"--faces 10", "--faces"},
       {"--colour texture --texture-size 16", "--texture-size"},
       {"--colour texture --texture-format gif", "--texture-format"},
-      {"--texture-size 512", "--texture-size needs --colour texture"},
-      {"--texture-format jpg", "--texture-format needs --colour texture"},
+      {"--colour vertex --texture-size 512", "--texture-size needs --colour texture"},
+      {"--colour vertex --texture-format jpg", "--texture-format needs --colour texture"},
   };
   for (const auto& [args, expected] : cases) {
     const CliResult r = run_cli(head + args, dir / "log.txt");

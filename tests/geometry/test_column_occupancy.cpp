@@ -56,9 +56,13 @@ TEST(ColumnOccupancy, GridAlignedBoxIsExact) {
           EXPECT_GT(value, 0.f) << p.transpose();
           ++strictly_inside;
         }
-        if (to_lo.minCoeff() < 0.f || to_hi.minCoeff() < 0.f) EXPECT_LT(value, 0.f) << p.transpose();
+        if (to_lo.minCoeff() < 0.f || to_hi.minCoeff() < 0.f) {
+          EXPECT_LT(value, 0.f) << p.transpose();
+        }
         const bool over_face = std::min(to_lo.x(), to_lo.y()) > 0.f && std::min(to_hi.x(), to_hi.y()) > 0.f;
-        if (over_face && (to_lo.z() == 0.f || to_hi.z() == 0.f)) EXPECT_EQ(value, 0.f);  // on the top or bottom face
+        if (over_face && (to_lo.z() == 0.f || to_hi.z() == 0.f)) {
+          EXPECT_EQ(value, 0.f);  // on the top or bottom face
+        }
       }
   EXPECT_EQ(strictly_inside, 12 * 12 * 12);
   // Columns on the outline (the side faces) belong to the box on the top-left rule's two sides only:

@@ -1,11 +1,13 @@
 // The bundled example (examples/spot/views, rendered by `unique3d render` from examples/spot/spot.obj)
-// reconstructs to a closed, manifold, fully coloured mesh whose four views overlap the input masks
+// reconstructs to a closed, manifold, textured mesh whose four views overlap the input masks
 // with IoU >= 0.9 (the initial mesh alone reaches only ~0.87 front/back and ~0.71 on the sides: the
 // coarse stage is what moves the silhouettes onto the masks).
 //
 // The optimisation stages run shortened here (coarse 100 of 200 steps, refinement 20 of 100, one
 // subdivision) to keep the test near half a minute; the CLI test runs the full default once.
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 #include "core/progress.h"
 #include "geometry/mesh_topology.h"
@@ -15,7 +17,7 @@
 namespace u3d {
 namespace {
 
-TEST(BundledExample, SpotReconstructsClosedColoredAndOnTheSilhouettes) {
+TEST(BundledExample, SpotReconstructsClosedTexturedAndOnTheSilhouettes) {
   set_progress_quiet(true);
   const ViewSet views = load_view_set(std::filesystem::path(UNIQUE3D_SOURCE_DIR) / "examples/spot/views");
   ReconstructOptions options;
@@ -24,11 +26,13 @@ TEST(BundledExample, SpotReconstructsClosedColoredAndOnTheSilhouettes) {
   options.cleanup.subdivision_iterations = 1;
   const ReconstructResult result = reconstruct(views, options);
   const Mesh& mesh = result.mesh;
-  const MeshTopology topo = mesh_topology(mesh);
+  const MeshTopology topo = surface_topology(mesh);  // the atlas splits vertices at chart borders
   EXPECT_TRUE(topo.closed_manifold()) << topo.summary();
   EXPECT_GT(topo.volume, 0.0);
-  ASSERT_EQ(mesh.colors.size(), mesh.positions.size());
-  for (const Vec3f& c : mesh.colors) ASSERT_TRUE(c.allFinite() && c.minCoeff() >= 0.f && c.maxCoeff() <= 1.f);
+  EXPECT_LE(mesh.face_count(), kDefaultTextureFaces);
+  ASSERT_TRUE(mesh.has_texture());
+  ASSERT_EQ(mesh.uvs.size(), mesh.positions.size());
+  for (float v : mesh.materials[0].texture.data) ASSERT_TRUE(std::isfinite(v) && v >= 0.f && v <= 1.f);
   EXPECT_EQ(result.coloring.unreachable, 0u);
   const std::array<float, 4> iou = silhouette_iou(mesh, views);
   std::printf("spot: %zu faces, %s\nspot silhouette IoU: front %.4f right %.4f back %.4f left %.4f\n",
@@ -36,7 +40,7 @@ TEST(BundledExample, SpotReconstructsClosedColoredAndOnTheSilhouettes) {
   for (const StageTiming& t : result.timings) std::printf("spot stage %s: %.2f s\n", t.name.c_str(), t.seconds);
   for (float v : iou) EXPECT_GE(v, 0.9f);
   const std::vector<std::string> stages = {"initial mesh", "coarse", "refine", "silhouette fit", "smooth and subdivide",
-                                           "colouring"};
+                                           "decimate", "texture"};
   ASSERT_EQ(result.timings.size(), stages.size());
   for (size_t i = 0; i < stages.size(); ++i) EXPECT_EQ(result.timings[i].name, stages[i]);
 }
@@ -52,7 +56,8 @@ TEST(BundledExample, ReconstructionIsDeterministic) {
   const Mesh b = reconstruct(views, options).mesh;
   ASSERT_EQ(a.faces, b.faces);
   ASSERT_EQ(a.positions, b.positions);
-  EXPECT_EQ(a.colors, b.colors);
+  EXPECT_EQ(a.uvs, b.uvs);
+  EXPECT_EQ(a.materials[0].texture.data, b.materials[0].texture.data);
 }
 
 }  // namespace

@@ -138,7 +138,9 @@ TEST(NormalIntegration, FastAt256And512Pixels) {
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const double cpu = double(std::clock() - cpu_start) / CLOCKS_PER_SEC;
     std::printf("integrate_normal_map %d px, 96 rotations: %.3f s CPU, %.3f s wall\n", size, cpu, wall);
-    if (size == 256) EXPECT_LT(cpu, 0.6);
+    if (size == 256) {
+      EXPECT_LT(cpu, 0.6);
+    }
   }
 }
 

@@ -46,12 +46,15 @@ TEST(ReconstructFolder, ReportsStagesAndStepsToItsListener) {
   EXPECT_EQ(recorder.count(ProgressEvent::Kind::StageEnd, "loading views"), 1u);
   EXPECT_EQ(recorder.count(ProgressEvent::Kind::Step, "coarse reconstruction"), 12u);
   EXPECT_EQ(recorder.count(ProgressEvent::Kind::Step, "mesh refinement"), 6u);
-  for (const ProgressEvent& e : recorder.events)
-    if (e.kind == ProgressEvent::Kind::Step) EXPECT_TRUE(e.step >= 1 && e.step <= e.steps);
+  for (const ProgressEvent& e : recorder.events) {
+    if (e.kind == ProgressEvent::Kind::Step) {
+      EXPECT_TRUE(e.step >= 1 && e.step <= e.steps);
+    }
+  }
   std::vector<std::string> names;
   for (const StageTiming& t : summary.timings) names.push_back(t.name);
   EXPECT_EQ(names, (std::vector<std::string>{"load", "initial mesh", "coarse", "refine", "silhouette fit",
-                                             "smooth and subdivide", "colouring", "write", "previews"}));
+                                             "smooth and subdivide", "decimate", "texture", "write", "previews"}));
   ASSERT_EQ(summary.written.size(), 3u);
   for (const auto& p : summary.written) EXPECT_TRUE(std::filesystem::exists(p)) << p;
   EXPECT_TRUE(summary.topology.closed_manifold());
