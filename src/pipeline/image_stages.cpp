@@ -47,6 +47,17 @@ std::array<Image, 4> run_refine_stage(const std::array<Image, 4>& views, const I
                                       NetworkStageSummary& summary) {
   const ModelFolder folder(network.models);
   summary.precision = resolve_precision(network);
+  nn::RefineSettings settings;
+  settings.size = options.size;
+  settings.steps = options.steps;
+  settings.strength = options.strength;
+  // The encoders run once and are freed before the denoising models load (nn/pipelines/unique3d_refine.h).
+  StageTimer encode_timer("encoding the prompt and the front view");
+  nn::RefineConditioning conditioning =
+      nn::RefineEncoders::load(refine_checkpoints(folder), summary.precision)
+          ->encode(image_to_uint8(composite_over_white(front)), settings);
+  summary.timings.push_back({"refinement encoders", encode_timer.finish()});
+
   StageTimer load_timer("loading the refinement models");
   auto model = nn::RefineModel::load(refine_checkpoints(folder), summary.precision);
   summary.timings.push_back({"load refinement models", load_timer.finish()});
@@ -54,12 +65,8 @@ std::array<Image, 4> run_refine_stage(const std::array<Image, 4>& views, const I
   StageTimer timer("refining the views");
   std::vector<torch::Tensor> inputs;
   for (const Image& view : views) inputs.push_back(image_to_uint8(composite_over_white(view)));
-  nn::RefineSettings settings;
-  settings.size = options.size;
-  settings.steps = options.steps;
-  settings.strength = options.strength;
   nn::SeededNoise noise(network.seed);
-  const torch::Tensor refined = model->run(inputs, image_to_uint8(composite_over_white(front)), settings, noise);
+  const torch::Tensor refined = model->run(inputs, conditioning, settings, noise);
   model.reset();
   summary.timings.push_back({"refine", timer.finish()});
   summary.peak_memory_mib = peak_memory_mib();

@@ -47,7 +47,10 @@ NetworkCheckResult check_network(const ModelFolder& models, Network network, Net
       case Network::kMatting: nn::MattingModel::load(models.matting(), fp32); break;
       case Network::kUpscaler: nn::UpscaleModel::load(models.upscaler(), fp32); break;
       case Network::kMultiView: nn::MultiViewModel::load(models.img2mvimg(), fp32, reader); break;
-      case Network::kRefine: nn::RefineModel::load(refine_checkpoints(models), fp32, reader); break;
+      case Network::kRefine:
+        nn::RefineEncoders::load(refine_checkpoints(models), fp32, reader);
+        nn::RefineModel::load(refine_checkpoints(models), fp32, reader);
+        break;
       case Network::kNormals:
         nn::NormalModel::load(models.image_variations_for_normals(), models.image2normal(), fp32, reader);
         break;

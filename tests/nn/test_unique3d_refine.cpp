@@ -47,6 +47,7 @@ class RefineFolders : public ::testing::Test {
 };
 
 TEST_F(RefineFolders, RunsTheImg2ImgTailEndToEnd) {
+  auto encoders = RefineEncoders::load(paths, Precision::kFp32);
   auto model = RefineModel::load(paths, Precision::kFp32);
   std::vector<torch::Tensor> views;
   for (int i = 0; i < 4; ++i) views.push_back(torch::randint(0, 256, {20, 20, 3}, torch::kUInt8));
@@ -56,7 +57,7 @@ TEST_F(RefineFolders, RunsTheImg2ImgTailEndToEnd) {
   settings.steps = 10;  // strength 0.2: the last 2 of 10 steps run
   CountingNoise noise;
   TensorMap trace;
-  const torch::Tensor out = model->run(views, front, settings, noise, &trace);
+  const torch::Tensor out = model->run(views, encoders->encode(front, settings, &trace), settings, noise, &trace);
 
   EXPECT_EQ(out.sizes(), (std::vector<int64_t>{4, 16, 16, 3}));
   EXPECT_TRUE(torch::isfinite(out).all().item<bool>());
@@ -83,38 +84,45 @@ TEST_F(RefineFolders, ListsTheFilesItReads) {
 }
 
 TEST_F(RefineFolders, MissingFilesAreNamed) {
+  // Each half checks every file of both before reading any weights.
+  auto expect_named = [&](const std::string& file, const std::string& source) {
+    for (int half = 0; half < 2; ++half) {
+      try {
+        if (half == 0) RefineEncoders::load(paths, Precision::kFp32);
+        else RefineModel::load(paths, Precision::kFp32);
+        ADD_FAILURE() << "no error for the missing " << file << " (half " << half << ")";
+      } catch (const u3d::Error& e) {
+        EXPECT_NE(std::string(e.what()).find(file), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find(source), std::string::npos) << e.what();
+      }
+    }
+  };
   fs::remove(paths.ip_adapter / "models" / "ip-adapter_sd15.safetensors");
   EXPECT_THROW(RefineModel::files(paths), u3d::Error);
-  try {
-    RefineModel::load(paths, Precision::kFp32);
-    FAIL() << "no error";
-  } catch (const u3d::Error& e) {
-    EXPECT_NE(std::string(e.what()).find("ip-adapter_sd15.safetensors"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("h94/IP-Adapter"), std::string::npos) << e.what();
-  }
+  expect_named("ip-adapter_sd15.safetensors", "h94/IP-Adapter");
   fs::remove_all(paths.ckpt / "controlnet-tile");
-  try {
-    RefineModel::load(paths, Precision::kFp32);
-    FAIL() << "no error";
-  } catch (const u3d::Error& e) {
-    EXPECT_NE(std::string(e.what()).find("controlnet-tile"), std::string::npos) << e.what();
-  }
+  expect_named("controlnet-tile", "wukailu/Unique3D");
 }
 
 TEST_F(RefineFolders, RejectsBadInputs) {
+  auto encoders = RefineEncoders::load(paths, Precision::kFp32);
   auto model = RefineModel::load(paths, Precision::kFp32);
   CountingNoise noise;
   std::vector<torch::Tensor> views(3, torch::zeros({20, 20, 3}, torch::kUInt8));
-  const torch::Tensor front = torch::zeros({20, 20, 3}, torch::kUInt8);
   RefineSettings settings;
   settings.size = 32;
-  EXPECT_THROW(model->run(views, front, settings, noise), u3d::Error);
+  EXPECT_THROW(encoders->encode(torch::zeros({20, 20, 4}, torch::kUInt8), settings), u3d::Error);
+  const RefineConditioning conditioning = encoders->encode(torch::zeros({20, 20, 3}, torch::kUInt8), settings);
+  EXPECT_THROW(model->run(views, conditioning, settings, noise), u3d::Error);
   views.push_back(torch::zeros({20, 20, 3}, torch::kUInt8));
   settings.size = 30;
-  EXPECT_THROW(model->run(views, front, settings, noise), u3d::Error);
+  EXPECT_THROW(model->run(views, conditioning, settings, noise), u3d::Error);
   settings.size = 32;
   settings.steps = 4;  // 4 x 0.2 rounds down to no step
-  EXPECT_THROW(model->run(views, front, settings, noise), u3d::Error);
+  EXPECT_THROW(model->run(views, conditioning, settings, noise), u3d::Error);
+  settings.steps = 50;
+  settings.guidance_scale = 1.0;  // the conditioning was made with guidance: two halves, not one
+  EXPECT_THROW(model->run(views, conditioning, settings, noise), u3d::Error);
   EXPECT_EQ(noise.draws, 0);
 }
 

@@ -69,43 +69,66 @@ std::vector<std::filesystem::path> RefineModel::files(const RefineCheckpoints& c
   return RefineFiles(checkpoints).all();
 }
 
+std::unique_ptr<RefineEncoders> RefineEncoders::load(const RefineCheckpoints& c, Precision precision,
+                                                     const CheckpointReader& reader) {
+  check_precision_supported(precision, torch::kCPU);
+  const RefineFiles f(c);  // every file is checked before any weights are read
+  auto m = std::make_unique<RefineEncoders>();
+  const torch::TensorOptions cpu = reader.options();
+  m->tokenizer = std::make_unique<ClipTokenizer>(ClipTokenizer::load(f.merges));
+  m->feature_extractor = std::make_unique<ClipImageProcessor>(
+      ClipImageProcessorConfig::from_json(read_json_file(f.processor_config), f.processor_config.string()));
+  m->text_encoder = ClipTextModel(ClipTextConfig::from_json(read_json_file(f.text_config), f.text_config.string()), cpu);
+  reader.load(*m->text_encoder, f.text_weights, clip_policy());
+  m->image_encoder = ClipVisionModelWithProjection(
+      ClipVisionConfig::from_json(read_json_file(f.image_encoder_config), f.image_encoder_config.string()), cpu);
+  reader.load(*m->image_encoder, f.image_encoder_weights, clip_policy());
+  set_precision(*m->text_encoder, precision);
+  set_precision(*m->image_encoder, precision);
+  return m;
+}
+
+RefineConditioning RefineEncoders::encode(const torch::Tensor& front, const RefineSettings& s, TensorMap* trace) {
+  torch::NoGradGuard no_grad;
+  check_rgb(front, "the front image");
+  const bool guidance = s.guidance_scale > 1.0;
+  // Text embeddings [negative, prompt] and the front image's CLIP embedding [zeros, embedding].
+  std::vector<std::string> prompts{s.prompt};
+  if (guidance) prompts.insert(prompts.begin(), s.negative_prompt);
+  RefineConditioning out;
+  out.prompt_embeds = text_encoder->forward(tokenizer->input_ids(prompts)).last_hidden_state;
+  out.image_embeds = image_encoder->forward(feature_extractor->pixel_values(front)).image_embeds;
+  if (guidance) out.image_embeds = torch::cat({torch::zeros_like(out.image_embeds), out.image_embeds});
+  if (trace) {
+    (*trace)["prompt_embeds"] = out.prompt_embeds;
+    (*trace)["image_embeds"] = out.image_embeds;
+  }
+  return out;
+}
+
 std::unique_ptr<RefineModel> RefineModel::load(const RefineCheckpoints& c, Precision precision,
                                                const CheckpointReader& reader) {
   check_precision_supported(precision, torch::kCPU);
   const RefineFiles f(c);  // every file is checked before any weights are read
-  const auto& [unet_config, unet_weights, vae_config, vae_weights, text_config, text_weights, merges, processor_config,
-               scheduler_config, controlnet_config, controlnet_weights, image_encoder_config, image_encoder_weights,
-               adapter_weights] = f;
-
   auto m = std::make_unique<RefineModel>();
   const torch::TensorOptions cpu = reader.options();
-  m->tokenizer = std::make_unique<ClipTokenizer>(ClipTokenizer::load(merges));
-  m->feature_extractor = std::make_unique<ClipImageProcessor>(
-      ClipImageProcessorConfig::from_json(read_json_file(processor_config), processor_config.string()));
-  m->scheduler = make_scheduler(parse_scheduler_config(read_json_file(scheduler_config), scheduler_config.string()),
+  m->scheduler = make_scheduler(parse_scheduler_config(read_json_file(f.scheduler_config), f.scheduler_config.string()),
                                 SchedulerKind::EulerAncestral);
-  m->text_encoder = ClipTextModel(ClipTextConfig::from_json(read_json_file(text_config), text_config.string()), cpu);
-  reader.load(*m->text_encoder, text_weights, clip_policy());
-  m->image_encoder = ClipVisionModelWithProjection(
-      ClipVisionConfig::from_json(read_json_file(image_encoder_config), image_encoder_config.string()), cpu);
-  reader.load(*m->image_encoder, image_encoder_weights, clip_policy());
-  m->unet = UNet2DConditionModel(UNetConfig::from_json(read_json_file(unet_config), unet_config.string()), cpu);
-  reader.load(*m->unet, unet_weights);
-  m->ip_adapter = load_ip_adapter(*m->unet, adapter_weights, 1.0, reader);
+  m->unet = UNet2DConditionModel(UNetConfig::from_json(read_json_file(f.unet_config), f.unet_config.string()), cpu);
+  reader.load(*m->unet, f.unet_weights);
+  m->ip_adapter = load_ip_adapter(*m->unet, f.adapter_weights, 1.0, reader);
   m->controlnet = ControlNetModel(
-      ControlNetConfig::from_json(read_json_file(controlnet_config), controlnet_config.string()), cpu);
-  reader.load(*m->controlnet, controlnet_weights);
-  m->vae = AutoencoderKL(AutoencoderKLConfig::from_json(read_json_file(vae_config), vae_config.string()), cpu);
-  reader.load(*m->vae, vae_weights);
-
-  for (torch::nn::Module* model : std::initializer_list<torch::nn::Module*>{
-           m->text_encoder.get(), m->image_encoder.get(), m->unet.get(), m->ip_adapter.get(), m->controlnet.get(),
-           m->vae.get()})
+      ControlNetConfig::from_json(read_json_file(f.controlnet_config), f.controlnet_config.string()), cpu);
+  reader.load(*m->controlnet, f.controlnet_weights);
+  m->vae = AutoencoderKL(AutoencoderKLConfig::from_json(read_json_file(f.vae_config), f.vae_config.string()), cpu);
+  reader.load(*m->vae, f.vae_weights);
+  for (torch::nn::Module* model : std::initializer_list<torch::nn::Module*>{m->unet.get(), m->ip_adapter.get(),
+                                                                            m->controlnet.get(), m->vae.get()})
     set_precision(*model, precision);
   return m;
 }
 
-torch::Tensor RefineModel::run(const std::vector<torch::Tensor>& views, const torch::Tensor& front,
+torch::Tensor RefineModel::run(const std::vector<torch::Tensor>& views, const RefineConditioning& conditioning,
                                const RefineSettings& s, NoiseSource& noise, TensorMap* trace) {
   torch::NoGradGuard no_grad;
   auto record = [trace](const std::string& name, const torch::Tensor& value) {
@@ -116,7 +139,6 @@ torch::Tensor RefineModel::run(const std::vector<torch::Tensor>& views, const to
     check_rgb(v, "each view");
     if (v.sizes() != views[0].sizes()) throw Error("refine: the four views must have one size");
   }
-  check_rgb(front, "the front image");
   const int64_t factor = vae->config.scale_factor() * 2;  // the grid splits into halves of whole latents
   if (s.size <= 0 || s.size % factor != 0)
     throw Error("refine: the size must be a positive multiple of " + std::to_string(factor) + ", got " +
@@ -128,6 +150,11 @@ torch::Tensor RefineModel::run(const std::vector<torch::Tensor>& views, const to
     throw Error("refine: steps x strength must be at least 1 (" + std::to_string(s.steps) + " x " +
                 std::to_string(s.strength) + ")");
   const bool guidance = s.guidance_scale > 1.0;
+  const int64_t batch = guidance ? 2 : 1;
+  const torch::Tensor& prompt_embeds = conditioning.prompt_embeds;
+  if (!prompt_embeds.defined() || !conditioning.image_embeds.defined() || prompt_embeds.dim() != 3 ||
+      prompt_embeds.size(0) != batch || conditioning.image_embeds.size(0) != batch)
+    throw Error("refine: the conditioning does not fit the settings (RefineEncoders::encode with the same guidance)");
   ip_adapter->set_scale(s.ip_adapter_scale);
 
   // Images: the grid, its bicubic resize as the control image (PIL's default filter, [0, 1]), and the
@@ -140,15 +167,7 @@ torch::Tensor RefineModel::run(const std::vector<torch::Tensor>& views, const to
   const torch::Tensor init_image = vae_preprocess(grid, s.size, s.size);
   record("init_image", init_image);
 
-  // Conditioning: text embeddings [negative, prompt] and the front image's CLIP embedding [zeros, embedding].
-  std::vector<std::string> prompts{s.prompt};
-  if (guidance) prompts.insert(prompts.begin(), s.negative_prompt);
-  const torch::Tensor prompt_embeds = text_encoder->forward(tokenizer->input_ids(prompts)).last_hidden_state;
-  record("prompt_embeds", prompt_embeds);
-  torch::Tensor image_embeds = image_encoder->forward(feature_extractor->pixel_values(front)).image_embeds;
-  if (guidance) image_embeds = torch::cat({torch::zeros_like(image_embeds), image_embeds});
-  record("image_embeds", image_embeds);
-  const torch::Tensor unet_context = ip_adapter->context(prompt_embeds, image_embeds);
+  const torch::Tensor unet_context = ip_adapter->context(prompt_embeds, conditioning.image_embeds);
   if (guidance) control = torch::cat({control, control});
 
   // img2img start (diffusers' get_timesteps): the schedule for all steps, entered at step `start`.

@@ -63,29 +63,47 @@ struct RefineSettings {
   std::string negative_prompt;  // empty, as the official call ends up (see above)
 };
 
-class RefineModel {
- public:
-  // Checks that every file is there (an Error names the first missing one and where it comes from)
-  // before reading any weights, then loads and converts to `precision`. With a checking `reader` the
-  // model is built on the meta device, only to check the checkpoints.
-  static std::unique_ptr<RefineModel> load(const RefineCheckpoints& checkpoints, Precision precision,
-                                           const CheckpointReader& reader = {});
-  // The files load() reads, checked to exist (an Error names the first missing one); reads nothing.
-  static std::vector<std::filesystem::path> files(const RefineCheckpoints& checkpoints);
+// What the two encoders make of the prompt and the front image: the conditioning of every step.
+struct RefineConditioning {
+  torch::Tensor prompt_embeds;  // [2, 77, D]: [negative, prompt] with guidance, else [1, 77, D]
+  torch::Tensor image_embeds;   // [2, E]: [zeros, front image] with guidance, else [1, E]
+};
 
-  // views: the four views, uint8 RGB [H, W, 3] of one size, in the multi-view model's order (pasted as
-  // the grid [0 1; 2 3]); front: uint8 RGB [H', W', 3], the front image on white (the official app passes
-  // the input image, upscaled, alpha composited on white). Returns float [4, size / 2, size / 2, 3] in
-  // [0, 1]. Reports progress_step("denoise", i, n) per step. `trace`, when given, receives grid,
-  // control_image, init_image, prompt_embeds, image_embeds, timesteps, init_latents, latents.<i> (before
-  // step i of the run) and images.
-  torch::Tensor run(const std::vector<torch::Tensor>& views, const torch::Tensor& front, const RefineSettings& settings,
-                    NoiseSource& noise, TensorMap* trace = nullptr);
+// The refinement comes in two halves, loaded one after the other so that their weights never share
+// memory: the encoders (CLIP text encoder and the IP-Adapter's ViT-H/14 image encoder, about 3.0 GB in
+// fp32) run once and are freed before the denoising half (UNet with IP-Adapter, ControlNet, VAE, about
+// 5.3 GB) loads. Each load() checks that every file of both halves is there (an Error names the first
+// missing one and where it comes from) before reading any weights, then loads and converts to
+// `precision`; with a checking `reader` the model is built on the meta device, only to check the checkpoints.
+class RefineEncoders {
+ public:
+  static std::unique_ptr<RefineEncoders> load(const RefineCheckpoints& checkpoints, Precision precision,
+                                              const CheckpointReader& reader = {});
+  // front: uint8 RGB [H, W, 3], the front image on white (the official app passes the input image,
+  // upscaled, alpha composited on white). `trace`, when given, receives prompt_embeds and image_embeds.
+  RefineConditioning encode(const torch::Tensor& front, const RefineSettings& settings, TensorMap* trace = nullptr);
 
   std::unique_ptr<ClipTokenizer> tokenizer;
   ClipTextModel text_encoder{nullptr};
   std::unique_ptr<ClipImageProcessor> feature_extractor;
   ClipVisionModelWithProjection image_encoder{nullptr};
+};
+
+class RefineModel {
+ public:
+  static std::unique_ptr<RefineModel> load(const RefineCheckpoints& checkpoints, Precision precision,
+                                           const CheckpointReader& reader = {});
+  // The files the two halves read, checked to exist (an Error names the first missing one); reads nothing.
+  static std::vector<std::filesystem::path> files(const RefineCheckpoints& checkpoints);
+
+  // views: the four views, uint8 RGB [H, W, 3] of one size, in the multi-view model's order (pasted as
+  // the grid [0 1; 2 3]); conditioning: RefineEncoders::encode with the same settings. Returns float
+  // [4, size / 2, size / 2, 3] in [0, 1]. Reports progress_step("denoise", i, n) per step. `trace`, when
+  // given, receives grid, control_image, init_image, timesteps, init_latents, latents.<i> (before step i
+  // of the run) and images.
+  torch::Tensor run(const std::vector<torch::Tensor>& views, const RefineConditioning& conditioning,
+                    const RefineSettings& settings, NoiseSource& noise, TensorMap* trace = nullptr);
+
   UNet2DConditionModel unet{nullptr};
   IpAdapter ip_adapter{nullptr};
   ControlNetModel controlnet{nullptr};
