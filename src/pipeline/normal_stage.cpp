@@ -126,6 +126,13 @@ ViewSetImages run_normal_stage(const std::array<Image, 4>& views, const NetworkO
   for (View v : kAllViews) {
     const size_t i = size_t(v);
     out.normals[i] = key_and_rotate(normal_maps[i], v);
+    if (v != View::Front || views[i].channels != 4) {  // (the front view takes the photo's alpha below)
+      bool any = false;
+      for (size_t p = 0; p < out.normals[i].pixel_count() && !any; ++p) any = out.normals[i].data[4 * p + 3] > 0.f;
+      require(any, std::string("normal prediction: the ") + view_name(v) +
+                       " normal map is one colour, so keying out its background (the colour of its corner, as the "
+                       "official code does) leaves no object; the normal model's weights may not be the official ones");
+    }
     const Image rgb = resized_square(views[i], rgb_size);
     if (v == View::Front && views[i].channels == 4) {
       out.rgb[i] = rgb;
