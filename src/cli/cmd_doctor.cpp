@@ -49,7 +49,7 @@ const CommandRegistration registration{
                       r.seconds, network_users(r.network).c_str());
           if (!r.ok()) std::printf("          %s\n", r.error.c_str());
         }
-        const bool matting = report.networks.front().ok();
+        const bool matting = report.ok(Network::kMatting);
         if (report.generate_ready())
           std::printf("generate: ready%s\n", matting ? "" : " for photos with a transparent background");
         else if (report.generate_without_refine_ready())

@@ -1,4 +1,4 @@
-// `unique3d generate PHOTO -o mesh.glb --models M`: the whole method, photo to coloured mesh, through
+// `unique3d generate PHOTO -o mesh.glb --models M`: the whole method, photo to textured mesh, through
 // the library facade (pipeline/generate.h); this file parses options and prints the summary.
 #include <cstdio>
 #include <fstream>
@@ -69,7 +69,7 @@ void run(const GenerateArgs& a) {
 }
 
 const CommandRegistration registration{
-    "generate", "One photo to a coloured 3D mesh: the whole Unique3D method", [](CLI::App& sub) {
+    "generate", "One photo to a textured 3D mesh: the whole Unique3D method", [](CLI::App& sub) {
       auto a = std::make_shared<GenerateArgs>();
       GenerateRequest& r = a->request;
       sub.add_option("image", r.image,

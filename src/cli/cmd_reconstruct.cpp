@@ -55,7 +55,7 @@ void run(const ReconstructArgs& args) {
 }
 
 const CommandRegistration registration{
-    "reconstruct", "ISOMER: reconstruct a coloured mesh from four views (RGB + normal maps)", [](CLI::App& sub) {
+    "reconstruct", "ISOMER: reconstruct a textured mesh from four views (RGB + normal maps)", [](CLI::App& sub) {
       auto args = std::make_shared<ReconstructArgs>();
       ReconstructOptions& o = args->request.options;
       sub.add_option("views_dir", args->request.views_dir,

@@ -40,12 +40,6 @@ std::string blas_name() {
   return "unknown";
 }
 
-bool ok(const DoctorReport& report, Network network) {
-  for (const NetworkCheckResult& r : report.networks)
-    if (r.network == network) return r.ok();
-  return false;
-}
-
 }  // namespace
 
 SystemReport system_report() {
@@ -65,11 +59,17 @@ SystemReport system_report() {
   return s;
 }
 
-bool DoctorReport::generate_without_refine_ready() const {
-  return ok(*this, Network::kUpscaler) && ok(*this, Network::kMultiView) && ok(*this, Network::kNormals);
+bool DoctorReport::ok(Network network) const {
+  for (const NetworkCheckResult& r : networks)
+    if (r.network == network) return r.ok();
+  return false;
 }
 
-bool DoctorReport::generate_ready() const { return generate_without_refine_ready() && ok(*this, Network::kRefine); }
+bool DoctorReport::generate_without_refine_ready() const {
+  return ok(Network::kUpscaler) && ok(Network::kMultiView) && ok(Network::kNormals);
+}
+
+bool DoctorReport::generate_ready() const { return generate_without_refine_ready() && ok(Network::kRefine); }
 
 DoctorReport run_doctor(const std::filesystem::path& models, NetworkCheck how) {
   DoctorReport report;

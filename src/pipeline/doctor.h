@@ -29,6 +29,7 @@ struct DoctorReport {
   SystemReport system;
   std::filesystem::path models;
   std::vector<NetworkCheckResult> networks;  // every network, in kAllNetworks order
+  bool ok(Network network) const;            // whether `network` passed its check
   // Which runs the folder supports: everything; generate --no-refine; nothing that needs networks.
   bool generate_ready() const;
   bool generate_without_refine_ready() const;

@@ -1,8 +1,10 @@
 #pragma once
 // Analytic view sets for the isomer tests: the four orthographic views of a sphere centred at the
-// origin, rendered exactly (no rasterizer involved).
+// origin and of a union of axis-aligned boxes, rendered exactly (no rasterizer involved).
 #include <cmath>
 #include <functional>
+#include <utility>
+#include <vector>
 
 #include "core/mesh.h"
 #include "core/view_set.h"
@@ -29,6 +31,44 @@ inline ViewSet sphere_views(float radius, int resolution,
         for (int i = 0; i < 3; ++i) {
           n.at(x, y, i) = 0.5f * (world[i] + 1.f);
           c.at(x, y, i) = col[i];
+        }
+        n.at(x, y, 3) = c.at(x, y, 3) = 1.f;
+      }
+    rgb_names[k] = view_file_name(v, false);
+    normal_names[k] = view_file_name(v, true);
+  }
+  return make_view_set(rgb, normal_maps, NormalSpace::World, rgb_names, normal_names);
+}
+
+using Box = std::pair<Vec3f, Vec3f>;  // lo, hi corners
+
+// The four exact views of a union of axis-aligned boxes: a pixel is foreground where the view's ray
+// passes through a box (normals: the view direction, all that matters here is the masks).
+inline ViewSet boxes_views(const std::vector<Box>& boxes, int resolution) {
+  std::array<Image, 4> rgb, normal_maps;
+  std::array<std::string, 4> rgb_names, normal_names;
+  for (View v : kAllViews) {
+    const size_t k = size_t(v);
+    const Camera camera = view_camera(v, resolution);
+    const Eigen::Matrix3f camera_to_world = camera.rotation().transpose();
+    const Vec3f toward = camera.toward_camera();
+    Image& c = rgb[k] = Image(resolution, resolution, 4, 0.f);
+    Image& n = normal_maps[k] = Image(resolution, resolution, 4, 0.f);
+    for (int y = 0; y < resolution; ++y)
+      for (int x = 0; x < resolution; ++x) {
+        const float cx = (x + 0.5f) * 2.f / resolution - 1.f, cy = 1.f - (y + 0.5f) * 2.f / resolution;
+        const Vec3f on_plane = camera_to_world * Vec3f(cx, cy, 0.f);
+        bool covered = false;
+        for (const Box& b : boxes) {
+          bool inside = true;
+          for (int i = 0; i < 3; ++i)
+            if (std::abs(toward[i]) < 0.5f) inside = inside && on_plane[i] > b.first[i] && on_plane[i] < b.second[i];
+          covered = covered || inside;
+        }
+        if (!covered) continue;
+        for (int i = 0; i < 3; ++i) {
+          n.at(x, y, i) = 0.5f * (toward[i] + 1.f);
+          c.at(x, y, i) = 0.5f;
         }
         n.at(x, y, 3) = c.at(x, y, 3) = 1.f;
       }

@@ -17,37 +17,6 @@ namespace {
 // Every edge used once in each direction, every vertex a single fan.
 bool closed_and_oriented(const Mesh& m) { return closed_manifold_problem(m.faces, m.positions.size()).empty(); }
 
-// The four exact views of the axis-aligned box [lo, hi]: each view sees the box's face toward it.
-ViewSet box_views(const Vec3f& lo, const Vec3f& hi, int resolution) {
-  std::array<Image, 4> rgb, normal_maps;
-  std::array<std::string, 4> rgb_names, normal_names;
-  for (View v : kAllViews) {
-    const size_t k = size_t(v);
-    const Camera camera = view_camera(v, resolution);
-    const Eigen::Matrix3f camera_to_world = camera.rotation().transpose();
-    const Vec3f toward = camera.toward_camera();
-    Image& c = rgb[k] = Image(resolution, resolution, 4, 0.f);
-    Image& n = normal_maps[k] = Image(resolution, resolution, 4, 0.f);
-    for (int y = 0; y < resolution; ++y)
-      for (int x = 0; x < resolution; ++x) {
-        const float cx = (x + 0.5f) * 2.f / resolution - 1.f, cy = 1.f - (y + 0.5f) * 2.f / resolution;
-        const Vec3f on_plane = camera_to_world * Vec3f(cx, cy, 0.f);  // the view axis component is 0
-        bool inside = true;
-        for (int i = 0; i < 3; ++i)
-          if (std::abs(toward[i]) < 0.5f) inside = inside && on_plane[i] > lo[i] && on_plane[i] < hi[i];
-        if (!inside) continue;
-        for (int i = 0; i < 3; ++i) {
-          n.at(x, y, i) = 0.5f * (toward[i] + 1.f);
-          c.at(x, y, i) = 0.5f;
-        }
-        n.at(x, y, 3) = c.at(x, y, 3) = 1.f;
-      }
-    rgb_names[k] = view_file_name(v, false);
-    normal_names[k] = view_file_name(v, true);
-  }
-  return make_view_set(rgb, normal_maps, NormalSpace::World, rgb_names, normal_names);
-}
-
 std::string error_of(const std::function<void()>& f) {
   try {
     f();
@@ -98,7 +67,7 @@ TEST(VisualHull, BoxCarvesToTheBox) {
   const Vec3f lo(0.125f, -0.25f, -0.75f), hi(0.625f, 0.375f, -0.125f);
   const int resolution = 128;
   const float voxel = 2.f / resolution;
-  const Mesh hull = carve_visual_hull(box_views(lo, hi, 256), {resolution, 0});
+  const Mesh hull = carve_visual_hull(testing::boxes_views({{lo, hi}}, 256), {resolution, 0});
   EXPECT_TRUE(closed_and_oriented(hull));
   const MeshTopology topo = mesh_topology(hull);
   EXPECT_TRUE(topo.closed_manifold()) << topo.summary();
@@ -120,7 +89,7 @@ TEST(VisualHull, BoxCarvesToTheBox) {
 TEST(VisualHull, FieldIsPositiveExactlyInsideEveryMask) {
   const Vec3f lo(0.125f, -0.25f, -0.75f), hi(0.625f, 0.375f, -0.125f);
   const int resolution = 32;
-  const ScalarGrid field = visual_hull_field(box_views(lo, hi, 64), resolution);
+  const ScalarGrid field = visual_hull_field(testing::boxes_views({{lo, hi}}, 64), resolution);
   ASSERT_EQ(field.nx, resolution + 2);
   int inside = 0;
   for (int z = 0; z < field.nz; ++z)

@@ -9,6 +9,7 @@
 
 #include "core/error.h"
 #include "nn/checkpoint/pickle_reader.h"
+#include "nn/checkpoint/torch_storage.h"
 #include "nn/checkpoint/zip_crc.h"
 
 namespace u3d::nn {
@@ -33,15 +34,6 @@ struct TensorRef : pickle::Object {
   std::vector<int64_t> strides;
 };
 
-const std::map<std::string, c10::ScalarType>& storage_types() {
-  static const std::map<std::string, c10::ScalarType> types = {
-      {"FloatStorage", c10::kFloat}, {"DoubleStorage", c10::kDouble}, {"HalfStorage", c10::kHalf},
-      {"BFloat16Storage", c10::kBFloat16}, {"LongStorage", c10::kLong}, {"IntStorage", c10::kInt},
-      {"ShortStorage", c10::kShort}, {"CharStorage", c10::kChar}, {"ByteStorage", c10::kByte},
-      {"BoolStorage", c10::kBool}};
-  return types;
-}
-
 int64_t as_int(const Value& v, const std::string& what) {
   require(v.is<int64_t>(), what + " is a " + v.type_name() + ", expected an int");
   return v.as<int64_t>();
@@ -62,7 +54,7 @@ class StateDictHooks : public pickle::PickleHooks {
   void check_global(const pickle::Global& g) override {
     const bool allowed = (g.module == "collections" && g.name == "OrderedDict") ||
                          (g.module == "torch._utils" && (g.name == "_rebuild_tensor_v2" || g.name == "_rebuild_parameter")) ||
-                         (g.module == "torch" && storage_types().count(g.name));
+                         (g.module == "torch" && storage_dtype(g.name));
     require(allowed, source_ + ": refuses the pickled global '" + g.qualified() +
                          "': only plain state dicts of tensors are loaded (no code from the file is run)");
   }
@@ -102,13 +94,15 @@ class StateDictHooks : public pickle::PickleHooks {
             source_ + ": unsupported persistent id (" + pid.type_name() + ")");
     const std::vector<Value>& t = pid.as<std::shared_ptr<pickle::Tuple>>()->items;
     require(t[0].is<std::string>() && t[0].as<std::string>() == "storage", source_ + ": persistent id is not a storage");
-    require(t[1].is<pickle::Global>() && t[1].as<pickle::Global>().module == "torch" &&
-                storage_types().count(t[1].as<pickle::Global>().name),
-            source_ + ": storage of unsupported type " + t[1].type_name());
+    const std::optional<c10::ScalarType> dtype =
+        t[1].is<pickle::Global>() && t[1].as<pickle::Global>().module == "torch"
+            ? storage_dtype(t[1].as<pickle::Global>().name)
+            : std::nullopt;
+    require(dtype.has_value(), source_ + ": storage of unsupported type " + t[1].type_name());
     require(t[2].is<std::string>(), source_ + ": storage key is a " + t[2].type_name());
     auto storage = std::make_shared<StorageRef>();
     storage->key = t[2].as<std::string>();
-    storage->dtype = storage_types().at(t[1].as<pickle::Global>().name);
+    storage->dtype = *dtype;
     storage->numel = as_int(t[4], source_ + ": storage size");
     require(storage->numel >= 0, source_ + ": negative storage size");
     return std::shared_ptr<const pickle::Object>(storage);

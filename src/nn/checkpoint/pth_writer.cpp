@@ -3,40 +3,27 @@
 #include <caffe2/serialize/inline_container.h>
 
 #include <fstream>
-#include <map>
 #include <string>
 #include <vector>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "nn/checkpoint/pickle_writer.h"
+#include "nn/checkpoint/torch_storage.h"
 
 namespace u3d::nn {
-namespace {
-
-const char* storage_name(c10::ScalarType type) {
-  static const std::map<c10::ScalarType, const char*> names = {
-      {c10::kFloat, "FloatStorage"}, {c10::kDouble, "DoubleStorage"}, {c10::kHalf, "HalfStorage"},
-      {c10::kBFloat16, "BFloat16Storage"}, {c10::kLong, "LongStorage"}, {c10::kInt, "IntStorage"},
-      {c10::kShort, "ShortStorage"}, {c10::kChar, "CharStorage"}, {c10::kByte, "ByteStorage"},
-      {c10::kBool, "BoolStorage"}};
-  auto it = names.find(type);
-  return it == names.end() ? nullptr : it->second;
-}
-
-}  // namespace
 
 void save_pth(const TensorMap& tensors, const std::filesystem::path& path) {
   pickle::PickleWriter pkl;
   std::vector<torch::Tensor> storages;
   pkl.empty_ordered_dict().mark();
   for (const auto& [name, tensor] : tensors) {
-    const char* storage = storage_name(tensor.scalar_type());
-    require(storage != nullptr, "cannot save tensor '" + name + "' of " + std::string(c10::toString(tensor.scalar_type())) +
-                                    " to " + path.string() + ": no torch storage type for it");
+    const std::string_view storage = storage_name(tensor.scalar_type());
+    require(!storage.empty(), "cannot save tensor '" + name + "' of " + std::string(c10::toString(tensor.scalar_type())) +
+                                  " to " + path.string() + ": no torch storage type for it");
     const torch::Tensor data = tensor.detach().to(torch::kCPU).contiguous();
-    pkl.str(name).tensor(storage, std::to_string(storages.size()), data.numel(), 0, data.sizes().vec(),
-                            data.strides().vec());
+    pkl.str(name).tensor(std::string(storage), std::to_string(storages.size()), data.numel(), 0, data.sizes().vec(),
+                         data.strides().vec());
     storages.push_back(data);
   }
   pkl.op('u');  // SETITEMS
