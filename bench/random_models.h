@@ -1,14 +1,16 @@
 #pragma once
 // A --models folder in the official layout (pipeline/model_folder.h, docs/models.md) with every network
 // at its official size and random weights, for timing `generate` without the real checkpoints: the
-// configs are the official ones (recorded in tests/data/nn/manifests), the weights N(0, 0.02^2) in fp16
-// (as the published fp16 files; the loaders convert), the Unique3D UNets as torch zip .pth files like
+// configs are the official ones (recorded in tests/data/nn/manifests), the weights random
+// (randomize_keeping_activations) in fp16 (as the published fp16 files; the loaders convert), the
+// Unique3D UNets as torch zip .pth files like
 // the release's, the rest as safetensors. Models that the official folders share (the VAE, the CLIP
 // image encoder, the plain UNet) are written once and hard-linked. About 11 GB; a "complete" marker
 // is written last, so an interrupted run starts over.
 #include <torch/torch.h>
 #include <zlib.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -20,7 +22,6 @@
 #include "nn/checkpoint/config_json.h"
 #include "nn/checkpoint/pth_writer.h"
 #include "nn/checkpoint/safetensors.h"
-#include "nn/layers/layers.h"
 #include "nn/models/clip_text.h"
 #include "nn/models/clip_vision.h"
 #include "nn/models/controlnet.h"
@@ -45,9 +46,25 @@ inline void write_json_file(const fs::path& path, const nlohmann::json& json) {
   std::ofstream(path) << json.dump(2);
 }
 
+// Random weights that keep the activations alive through a deep network, as the golden generators'
+// randomize_: matrices and kernels N(0, 1/fan_in), other weights (norm scales) 1 + 0.1 N(0, 1), the
+// rest (biases, embeddings of one vector) 0.1 N(0, 1). N(0, 0.02^2) everywhere made every norm scale
+// nearly 0, so each network's output was one colour, and the normal maps' background key then left
+// no object for the reconstruction.
+inline void randomize_keeping_activations(torch::nn::Module& module) {
+  torch::NoGradGuard no_grad;
+  for (auto& p : module.named_parameters(true)) {
+    torch::Tensor t = p.value();
+    const std::string& name = p.key();
+    if (t.dim() >= 2) t.normal_(0.0, 1.0 / std::sqrt(double(t.numel() / t.size(0))));
+    else if (name.size() >= 6 && name.compare(name.size() - 6, 6, "weight") == 0) t.normal_(1.0, 0.1);
+    else t.normal_(0.0, 0.1);
+  }
+}
+
 // The module's parameters, randomised, in fp16.
 inline nn::TensorMap random_fp16_weights(torch::nn::Module& module) {
-  nn::randomize_parameters(module, 0.02);
+  randomize_keeping_activations(module);
   nn::TensorMap out;
   for (const auto& p : module.named_parameters(true)) out[p.key()] = p.value().detach().to(torch::kHalf);
   for (const auto& b : module.named_buffers(true)) out[b.key()] = b.value().detach().clone();
