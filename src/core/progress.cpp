@@ -45,7 +45,7 @@ void StderrProgress::on_event(const ProgressEvent& event) {
   std::string line;
   switch (event.kind) {
     case ProgressEvent::Kind::StageBegin:
-      stage_begin_ = last_line_ = now;
+      stage_begin_ = last_line_ = loop_begin_ = last_step_time_ = now;
       loop_.clear();
       line = event.text + " ...";
       break;
@@ -60,16 +60,19 @@ void StderrProgress::on_event(const ProgressEvent& event) {
       if (event.text != loop_ || event.step <= last_step_) {  // a new loop
         loop_ = event.text;
         loop_printed_ = false;
+        loop_begin_ = last_step_time_;  // a loop run after another one starts where that one ended
       }
       last_step_ = event.step;
+      last_step_time_ = now;
       const bool last = event.step >= event.steps;
       if (!(std::chrono::duration<double>(now - last_line_).count() >= interval_ || (last && loop_printed_))) return;
       loop_printed_ = true;
       const double elapsed = std::chrono::duration<double>(now - stage_begin_).count();
       line = event.text + " " + std::to_string(event.step) + "/" + std::to_string(event.steps) + ", " +
              duration_text(elapsed);
+      const double loop_elapsed = std::chrono::duration<double>(now - loop_begin_).count();
       if (!last && event.step > 0)
-        line += ", about " + duration_text(elapsed / event.step * (event.steps - event.step)) + " left";
+        line += ", about " + duration_text(loop_elapsed / event.step * (event.steps - event.step)) + " left";
       break;
     }
   }

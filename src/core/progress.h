@@ -33,7 +33,8 @@ class ProgressListener {
 // "[unique3d] name ..." when a stage starts, "[unique3d] name done in X s" when it ends, messages as
 // they are. A loop's steps are printed only when the loop is slow: at most one line every
 // `step_interval_seconds`, "[unique3d] denoise 3/30, 41 s, about 6 min 9 s left" (the time since the
-// stage around the loop began, and the rest extrapolated from it), and its last step if any was
+// stage around the loop began, and the rest of this loop extrapolated from the time since it began: the
+// stage's start, or the last step of the loop before it), and its last step if any was
 // printed. Nothing when quiet. Lines go to `out` (stderr by default).
 class StderrProgress : public ProgressListener {
  public:
@@ -48,6 +49,8 @@ class StderrProgress : public ProgressListener {
   std::FILE* out_;
   Clock::time_point stage_begin_ = Clock::now();  // the last StageBegin: where a loop's time starts
   Clock::time_point last_line_ = Clock::now();
+  Clock::time_point loop_begin_ = Clock::now();  // where the current loop's time starts
+  Clock::time_point last_step_time_ = Clock::now();
   std::string loop_;  // the loop whose steps are being counted
   int last_step_ = 0;
   bool loop_printed_ = false;

@@ -7,6 +7,7 @@
 #include <regex>
 #include <string>
 #include <thread>
+#include <vector>
 
 namespace u3d {
 namespace {
@@ -37,6 +38,32 @@ TEST(StderrProgress, PrintsStepsOfSlowLoopsWithTheTimeLeft) {
       << text;
   EXPECT_TRUE(std::regex_search(text, std::regex(R"(\[unique3d\] denoise 3/3, [0-9]+ s\n)"))) << text;
   EXPECT_TRUE(std::regex_search(text, std::regex(R"(\[unique3d\] denoising done in [0-9.]+ s)"))) << text;
+  std::fclose(f);
+}
+
+// A stage that runs one loop after another (the upscaler's tiles, image by image): each loop's time
+// left comes from that loop's own pace, not from the whole stage's time.
+TEST(StderrProgress, EachLoopEstimatesFromItsOwnStart) {
+  std::FILE* f = std::tmpfile();
+  ASSERT_NE(f, nullptr);
+  StderrProgress lines(false, /*step_interval_seconds=*/0.0, f);
+  ProgressScope scope(&lines);
+  {
+    StageTimer stage("upscaling");
+    for (int image = 0; image < 3; ++image)
+      for (int i = 1; i <= 2; ++i) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(600));
+        progress_step("upscale", i, 2);
+      }
+  }
+  // The third image's first tile: 3 s into the stage, 0.6 s into its loop; one tile left.
+  const std::string text = printed(f);
+  const std::regex first_tile(R"(upscale 1/2, [0-9]+ s, about ([0-9]+) s left)");
+  std::vector<std::string> left;
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), first_tile); it != std::sregex_iterator(); ++it)
+    left.push_back((*it)[1]);
+  ASSERT_EQ(left.size(), 3u) << text;
+  EXPECT_EQ(left[2], "1") << text;  // from the stage's start it would be 3 s
   std::fclose(f);
 }
 
