@@ -1,8 +1,10 @@
 // Full-size SD 1.x VAE (tests/data/nn/manifests/vae_sd1x.json, random weights) decoding one latent into a
-// SIZE x SIZE image in tiles (AutoencoderKL::decode_tiled with the config's default tiling), on the CPU
-// with every core. Prints the time, the tile count and the process's peak resident memory, which is
-// this decode's alone (one decode per run). Not a Google Benchmark: a 2048 px decode takes minutes.
-// Usage: bench_vae [--dtype=fp32|bf16] [--size=2048]
+// SIZE x SIZE image in tiles (AutoencoderKL::decode_tiled with the config's default tiling; --op=tiled),
+// decoding it whole (--op=decode) or encoding a SIZE x SIZE image whole (--op=encode, as the refinement
+// encodes its 1024 px grid), on the CPU with every core. Prints the time, the tile count and the
+// process's peak resident memory, which is this operation's alone plus the weights (one per run). Not a
+// Google Benchmark: a 2048 px decode takes minutes.
+// Usage: bench_vae [--dtype=fp32|bf16] [--size=2048] [--op=tiled|decode|encode]
 #include <sys/resource.h>
 #include <torch/torch.h>
 
@@ -22,14 +24,18 @@ using namespace u3d::nn;
 int main(int argc, char** argv) try {
   Precision precision = Precision::kFp32;
   int64_t size = 2048;
+  std::string op = "tiled";
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg.starts_with("--dtype="))
       precision = parse_precision(arg.substr(8), "--dtype");
     else if (arg.starts_with("--size="))
       size = std::stoll(arg.substr(7));
+    else if (arg.starts_with("--op=") && (arg == "--op=tiled" || arg == "--op=decode" || arg == "--op=encode"))
+      op = arg.substr(5);
     else
-      throw u3d::Error("unknown argument '" + arg + "' (usage: bench_vae [--dtype=fp32|bf16] [--size=2048])");
+      throw u3d::Error("unknown argument '" + arg +
+                       "' (usage: bench_vae [--dtype=fp32|bf16] [--size=2048] [--op=tiled|decode|encode])");
   }
   configure_torch_threads();
   at::globalContext().setFlushDenormal(true);  // random weights: keep the FPU off its denormal path
@@ -50,16 +56,20 @@ int main(int argc, char** argv) try {
   const int64_t per_side = latent_side <= tiling.tile_latent ? 1 : (latent_side + stride - 1) / stride;
 
   const auto start = std::chrono::steady_clock::now();
-  torch::Tensor image = vae->decode_tiled(latent, tiling);
+  torch::Tensor out;
+  if (op == "encode")
+    out = vae->encode(torch::rand({1, config.in_channels, size, size}) * 2 - 1).mean;
+  else
+    out = op == "decode" ? vae->decode(latent) : vae->decode_tiled(latent, tiling);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
-  std::printf("VAE decode %s: %lld x %lld image, %lld tiles of %lld px, %.1f s, peak RSS %.2f GB (output %s, %s)\n",
-              precision_name(precision), static_cast<long long>(image.size(2)), static_cast<long long>(image.size(3)),
-              static_cast<long long>(per_side * per_side),
-              static_cast<long long>(tiling.tile_latent * config.scale_factor()), seconds,
-              static_cast<double>(usage.ru_maxrss) / (1024.0 * 1024.0), c10::toString(image.scalar_type()),
-              image.isfinite().all().item<bool>() ? "finite" : "NOT finite");
+  const long long tiles = op == "tiled" ? per_side * per_side : 1;
+  const long long tile_px = op == "tiled" ? tiling.tile_latent * config.scale_factor() : size;
+  std::printf("VAE %s %s: %lld px, output %s, %lld tiles of %lld px, %.1f s, peak RSS %.2f GB (%s, %s)\n", op.c_str(),
+              precision_name(precision), static_cast<long long>(size), c10::str(out.sizes()).c_str(), tiles, tile_px,
+              seconds, static_cast<double>(usage.ru_maxrss) / (1024.0 * 1024.0), c10::toString(out.scalar_type()),
+              out.isfinite().all().item<bool>() ? "finite" : "NOT finite");
   return 0;
 } catch (const std::exception& e) {
   std::fprintf(stderr, "bench_vae: %s\n", e.what());

@@ -128,7 +128,7 @@ struct Run {
     keep(images);
   }
   void report(Stage stage, double seconds, bool resumed) {
-    summary.stages.push_back({generate_stage_names()[stage], seconds, peak_memory_mib(), resumed});
+    summary.stages.push_back({generate_stage_names()[stage], seconds, resumed ? 0.0 : peak_memory_mib(), resumed});
   }
 
   // Reads what `stage` handed on from the intermediates folder.
@@ -277,6 +277,7 @@ GenerateSummary generate(const GenerateRequest& request, ProgressListener* liste
   run.summary.precision = resolve_precision(request.network);
   for (int s = kPrepare; s < kStageCount; ++s) {
     if (s >= start) {
+      reset_peak_memory();  // each stage reports its own peak
       run.run(Stage(s), photo);
     } else {
       // The front image is needed to the end; the views only from the stage before the first to run.

@@ -44,7 +44,7 @@ struct GenerateRequest {
 struct GenerateStageReport {
   std::string name;              // "prepare", "multiview", ...
   double seconds = 0.0;          // 0 when resumed
-  double peak_memory_mib = 0.0;  // the process's peak resident memory at the stage's end
+  double peak_memory_mib = 0.0;  // the process's peak resident memory while the stage ran (0 when resumed)
   bool resumed = false;          // its outputs were read from from_intermediates
 };
 

@@ -6,6 +6,7 @@
 #include "core/atomic_file.h"
 #include "core/camera.h"
 #include "core/error.h"
+#include "core/memory.h"
 #include "core/view_set.h"
 #include "nn/pipelines/input_photo.h"
 #include "nn/pipelines/matting.h"
@@ -51,11 +52,15 @@ std::array<Image, 4> run_refine_stage(const std::array<Image, 4>& views, const I
   settings.size = options.size;
   settings.steps = options.steps;
   settings.strength = options.strength;
+  settings.free_networks_as_done = true;
   // The encoders run once and are freed before the denoising models load (nn/pipelines/unique3d_refine.h).
-  StageTimer encode_timer("encoding the prompt and the front view");
+  StageTimer encode_timer("encoding the prompt, the front view and the views");
+  std::vector<torch::Tensor> inputs;
+  for (const Image& view : views) inputs.push_back(image_to_uint8(composite_over_white(view)));
   nn::RefineConditioning conditioning =
       nn::RefineEncoders::load(refine_checkpoints(folder), summary.precision)
-          ->encode(image_to_uint8(composite_over_white(front)), settings);
+          ->encode(inputs, image_to_uint8(composite_over_white(front)), settings);
+  release_freed_memory();  // the encoders
   summary.timings.push_back({"refinement encoders", encode_timer.finish()});
 
   StageTimer load_timer("loading the refinement models");
@@ -63,11 +68,10 @@ std::array<Image, 4> run_refine_stage(const std::array<Image, 4>& views, const I
   summary.timings.push_back({"load refinement models", load_timer.finish()});
 
   StageTimer timer("refining the views");
-  std::vector<torch::Tensor> inputs;
-  for (const Image& view : views) inputs.push_back(image_to_uint8(composite_over_white(view)));
   nn::SeededNoise noise(network.seed);
-  const torch::Tensor refined = model->run(inputs, conditioning, settings, noise);
+  const torch::Tensor refined = model->run(conditioning, settings, noise);
   model.reset();
+  release_freed_memory();
   summary.timings.push_back({"refine", timer.finish()});
   summary.peak_memory_mib = peak_memory_mib();
   std::array<Image, 4> out;

@@ -4,6 +4,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/memory.h"
 #include "core/view_set.h"
 #include "nn/pipelines/unique3d_multiview.h"
 #include "nn/preprocess/pil_resize.h"
@@ -24,9 +25,11 @@ std::array<Image, 4> run_multiview_stage(const Image& front, const NetworkOption
   settings.size = options.size;
   settings.steps = options.steps;
   settings.guidance_scale = options.guidance_scale;
+  settings.free_networks_as_done = true;
   nn::SeededNoise noise(network.seed);
   const torch::Tensor views = model->run(nn::image_to_uint8_rgb(composite_over_white(front)), settings, noise);
   model.reset();
+  release_freed_memory();
   summary.timings.push_back({"multi-view", timer.finish()});
   summary.peak_memory_mib = peak_memory_mib();
   std::array<Image, 4> out;

@@ -34,8 +34,14 @@ struct NetworkStageSummary {
 // The precision the request asks for, or the CPU's default; an Error when it cannot run here.
 nn::Precision resolve_precision(const NetworkOptions& options);
 
-// The process's peak resident memory in MiB (getrusage).
+// The process's peak resident memory in MiB since it started or since the last reset_peak_memory()
+// (the kernel's VmHWM; getrusage where /proc is not readable).
 double peak_memory_mib();
+
+// Starts a new peak from the current resident memory (Linux's /proc/self/clear_refs), so that a run of
+// stages can report each stage's own peak; where the kernel does not allow it the peak keeps counting
+// from the start of the process.
+void reset_peak_memory();
 
 // PIL's rgba_to_rgb of the official app: the image composited over white (Pillow's paste with its own
 // alpha as the mask, 8-bit arithmetic), as RGB. RGB images pass through.

@@ -6,6 +6,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/memory.h"
 #include "core/view_set.h"
 #include "nn/pipelines/unique3d_normal.h"
 #include "nn/pipelines/upscale.h"
@@ -101,9 +102,11 @@ ViewSetImages run_normal_stage(const std::array<Image, 4>& views, const NetworkO
   settings.size = options.size;
   settings.steps = options.steps;
   settings.guidance_scale = options.guidance_scale;
+  settings.free_networks_as_done = true;
   nn::SeededNoise noise(network.seed);
   const torch::Tensor maps = model->run(inputs, settings, noise);
   model.reset();
+  release_freed_memory();
   summary.timings.push_back({"normals", timer.finish()});
   std::vector<torch::Tensor> normal_maps;
   for (int64_t i = 0; i < maps.size(0); ++i) normal_maps.push_back(maps[i]);

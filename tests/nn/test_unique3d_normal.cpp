@@ -29,7 +29,9 @@ class NormalFolders : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(root); }
 
-  void expect_official_images(Precision precision, double tolerance) {
+  // Returns the model after its run.
+  std::unique_ptr<NormalModel> expect_official_images(Precision precision, double tolerance,
+                                                      bool free_networks_as_done = false) {
     auto model = NormalModel::load(base, unique3d, precision);
     auto in = golden_tensors("unet_ref", "inputs");
     auto ref = golden_tensors("unet_ref", "outputs");
@@ -37,6 +39,7 @@ class NormalFolders : public ::testing::Test {
     NormalSettings settings;
     settings.size = 32;
     settings.steps = 2;
+    settings.free_networks_as_done = free_networks_as_done;
     GoldenPipelineNoise noise(in, /*draws_initial_latents=*/true);
     torch::Tensor images = model->run({image, image.flip(1).contiguous()}, settings, noise);
     EXPECT_EQ(noise.draws, 3);
@@ -44,6 +47,7 @@ class NormalFolders : public ::testing::Test {
       EXPECT_CLOSE_TO_GOLDEN(images, ref["pipe.images"], tolerance);
     else
       EXPECT_RELATIVE_TO_GOLDEN(images, ref["pipe.images"], tolerance);
+    return model;
   }
 
   fs::path root, base, unique3d;
@@ -65,6 +69,28 @@ TEST_F(NormalFolders, ReferenceUNetFromTheCheckpoint) {
   for (auto& [key, value] : spoiled) value = torch::zeros_like(value);
   save_safetensors(spoiled, base / "unet" / "diffusion_pytorch_model.safetensors");
   expect_official_images(Precision::kFp32, 1e-4);
+}
+
+// The pipeline stages free each network once the run is past it (the CLIP encoder after the
+// embeddings, both UNets before decoding): the images are the same, and the spent model says so when
+// asked to run again instead of crashing.
+TEST_F(NormalFolders, FreeingTheNetworksAsDoneKeepsTheImages) {
+  fs::copy_file(golden_dir("unet_ref") / "weights.pth", unique3d / "unet_state_dict.pth");
+  auto model = expect_official_images(Precision::kFp32, 1e-4, /*free_networks_as_done=*/true);
+  EXPECT_EQ(model->unet, nullptr);
+  EXPECT_TRUE(model->parts.image_encoder.is_empty());
+  EXPECT_FALSE(model->parts.vae.is_empty());
+  const torch::Tensor image = golden_tensors("unet_mv", "inputs")["pipe.test_image_uint8"];
+  SeededNoise noise(1);
+  NormalSettings settings;
+  settings.size = 32;
+  settings.steps = 1;
+  try {
+    model->run({image}, settings, noise);
+    FAIL() << "no error";
+  } catch (const u3d::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("freed"), std::string::npos) << e.what();
+  }
 }
 
 TEST_F(NormalFolders, MissingFilesAreNamedBeforeLoading) {

@@ -57,7 +57,7 @@ TEST_F(RefineFolders, RunsTheImg2ImgTailEndToEnd) {
   settings.steps = 10;  // strength 0.2: the last 2 of 10 steps run
   CountingNoise noise;
   TensorMap trace;
-  const torch::Tensor out = model->run(views, encoders->encode(front, settings, &trace), settings, noise, &trace);
+  const torch::Tensor out = model->run(encoders->encode(views, front, settings, &trace), settings, noise, &trace);
 
   EXPECT_EQ(out.sizes(), (std::vector<int64_t>{4, 16, 16, 3}));
   EXPECT_TRUE(torch::isfinite(out).all().item<bool>());
@@ -74,6 +74,39 @@ TEST_F(RefineFolders, RunsTheImg2ImgTailEndToEnd) {
   EXPECT_GT(trace.at("image_embeds")[1].abs().max().item<float>(), 0.0f);
   // The quarters are the decoded grid in grid order.
   EXPECT_TRUE(torch::equal(out[3], trace.at("images").narrow(0, 16, 16).narrow(1, 16, 16)));
+}
+
+// The refinement stage frees the UNet, IP-Adapter and ControlNet before decoding the grid: the views
+// are the same, and the spent model names the reason when asked to run again.
+TEST_F(RefineFolders, FreeingTheNetworksAsDoneKeepsTheViews) {
+  auto encoders = RefineEncoders::load(paths, Precision::kFp32);
+  auto model = RefineModel::load(paths, Precision::kFp32);
+  std::vector<torch::Tensor> views;
+  for (int i = 0; i < 4; ++i) views.push_back(torch::randint(0, 256, {16, 16, 3}, torch::kUInt8));
+  RefineSettings settings;
+  settings.size = 32;
+  settings.steps = 10;
+  const RefineConditioning kept_conditioning = encoders->encode(views, views[0], settings);
+  SeededNoise kept_noise(5), freed_noise(5);
+  const torch::Tensor kept = model->run(kept_conditioning, settings, kept_noise);
+  settings.free_networks_as_done = true;
+  const RefineConditioning conditioning = encoders->encode(views, views[0], settings);
+  EXPECT_TRUE(encoders->text_encoder.is_empty());
+  EXPECT_TRUE(encoders->vae.is_empty());
+  EXPECT_TRUE(torch::equal(kept_conditioning.grid.mean, conditioning.grid.mean));
+  const torch::Tensor freed = model->run(conditioning, settings, freed_noise);
+  EXPECT_TRUE(torch::equal(kept, freed));
+  EXPECT_TRUE(model->unet.is_empty());
+  EXPECT_TRUE(model->controlnet.is_empty());
+  for (int half = 0; half < 2; ++half) {
+    try {
+      if (half == 0) encoders->encode(views, views[0], settings);
+      else model->run(conditioning, settings, freed_noise);
+      ADD_FAILURE() << "no error from half " << half;
+    } catch (const u3d::Error& e) {
+      EXPECT_NE(std::string(e.what()).find("freed"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST_F(RefineFolders, ListsTheFilesItReads) {
@@ -111,18 +144,25 @@ TEST_F(RefineFolders, RejectsBadInputs) {
   std::vector<torch::Tensor> views(3, torch::zeros({20, 20, 3}, torch::kUInt8));
   RefineSettings settings;
   settings.size = 32;
-  EXPECT_THROW(encoders->encode(torch::zeros({20, 20, 4}, torch::kUInt8), settings), u3d::Error);
-  const RefineConditioning conditioning = encoders->encode(torch::zeros({20, 20, 3}, torch::kUInt8), settings);
-  EXPECT_THROW(model->run(views, conditioning, settings, noise), u3d::Error);
+  const torch::Tensor front = torch::zeros({20, 20, 3}, torch::kUInt8);
+  EXPECT_THROW(encoders->encode(views, front, settings), u3d::Error);  // three views
   views.push_back(torch::zeros({20, 20, 3}, torch::kUInt8));
+  EXPECT_THROW(encoders->encode(views, torch::zeros({20, 20, 4}, torch::kUInt8), settings), u3d::Error);
+  std::vector<torch::Tensor> mixed = views;
+  mixed[1] = torch::zeros({22, 22, 3}, torch::kUInt8);
+  EXPECT_THROW(encoders->encode(mixed, front, settings), u3d::Error);
   settings.size = 30;
-  EXPECT_THROW(model->run(views, conditioning, settings, noise), u3d::Error);
+  EXPECT_THROW(encoders->encode(views, front, settings), u3d::Error);
   settings.size = 32;
+  const RefineConditioning conditioning = encoders->encode(views, front, settings);
   settings.steps = 4;  // 4 x 0.2 rounds down to no step
-  EXPECT_THROW(model->run(views, conditioning, settings, noise), u3d::Error);
+  EXPECT_THROW(model->run(conditioning, settings, noise), u3d::Error);
   settings.steps = 50;
+  settings.size = 48;  // not the size the conditioning was made at
+  EXPECT_THROW(model->run(conditioning, settings, noise), u3d::Error);
+  settings.size = 32;
   settings.guidance_scale = 1.0;  // the conditioning was made with guidance: two halves, not one
-  EXPECT_THROW(model->run(views, conditioning, settings, noise), u3d::Error);
+  EXPECT_THROW(model->run(conditioning, settings, noise), u3d::Error);
   EXPECT_EQ(noise.draws, 0);
 }
 

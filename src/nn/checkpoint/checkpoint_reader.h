@@ -25,8 +25,8 @@ class CheckpointReader {
   torch::TensorOptions options() const;
   // The file's tensors (safetensors by extension, else torch zip), or meta tensors of their shapes.
   TensorMap read(const std::filesystem::path& file) const;
-  // load_state_dict, or check_state_dict when checking.
-  LoadReport apply(torch::nn::Module& module, const TensorMap& weights, const LoadPolicy& policy,
+  // load_state_dict (which frees a map moved in as it copies), or check_state_dict when checking.
+  LoadReport apply(torch::nn::Module& module, TensorMap weights, const LoadPolicy& policy,
                    const std::string& source) const;
   // read() then apply().
   LoadReport load(torch::nn::Module& module, const std::filesystem::path& file, const LoadPolicy& policy = {}) const;

@@ -168,7 +168,7 @@ LoadReport check_state_dict(torch::nn::Module& module, const TensorMap& weights,
   return plan_load(module, weights, policy, source).report;
 }
 
-LoadReport load_state_dict(torch::nn::Module& module, const TensorMap& weights, const LoadPolicy& policy,
+LoadReport load_state_dict(torch::nn::Module& module, TensorMap weights, const LoadPolicy& policy,
                            const std::string& source) {
   LoadPlan plan = plan_load(module, weights, policy, source);
   LoadReport& report = plan.report;
@@ -176,13 +176,15 @@ LoadReport load_state_dict(torch::nn::Module& module, const TensorMap& weights, 
   torch::NoGradGuard no_grad;
   for (auto& [key, entry] : plan.sources) {
     torch::Tensor& target = targets.at(key);
-    const torch::Tensor& src = entry.second;
+    const torch::Tensor src = entry.second;
     if (src.scalar_type() != target.scalar_type()) {
       report.converted.push_back(key + ": " + c10::toString(src.scalar_type()) + " -> " +
                                  c10::toString(target.scalar_type()));
     }
     target.copy_(src);
     ++report.loaded;
+    entry.second = torch::Tensor();  // the last handle to the file's tensor: its memory goes now
+    weights.erase(entry.first);
   }
   return report;
 }

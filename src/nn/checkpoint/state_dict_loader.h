@@ -56,8 +56,10 @@ TensorMap take_prefix(TensorMap& weights, const std::string& prefix);
 
 // Copies `weights` into `module`'s parameters and buffers (keys as in named_parameters() /
 // named_buffers()), converting dtypes as described above, without recording gradients. `source` names
-// the checkpoint in errors. Nothing is copied when the check fails.
-LoadReport load_state_dict(torch::nn::Module& module, const TensorMap& weights, const LoadPolicy& policy,
+// the checkpoint in errors. Nothing is copied when the check fails. Takes the map by value and drops
+// each tensor once it is copied: a map moved in is freed as the module fills, so loading needs little
+// more memory than the module itself (the module's pages are only touched as they are written).
+LoadReport load_state_dict(torch::nn::Module& module, TensorMap weights, const LoadPolicy& policy,
                            const std::string& source);
 
 // The same checks without copying anything: `weights` may be meta tensors (inspect_weights_file).

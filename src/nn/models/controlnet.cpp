@@ -43,8 +43,12 @@ ControlNetConditioningEmbeddingImpl::ControlNetConditioningEmbeddingImpl(int64_t
 }
 
 torch::Tensor ControlNetConditioningEmbeddingImpl::forward(const torch::Tensor& condition) {
-  torch::Tensor h = torch::silu(conv_in->forward(condition));
-  for (auto& b : blocks) h = torch::silu(b->forward(h));
+  torch::Tensor h = conv_in->forward(condition);
+  torch::silu_(h);
+  for (auto& b : blocks) {
+    h = b->forward(h);
+    torch::silu_(h);
+  }
   return conv_out->forward(h);
 }
 

@@ -133,7 +133,8 @@ torch::Tensor VaeEncoderImpl::forward(const torch::Tensor& image) {
   torch::Tensor h = conv_in->forward(image);
   for (auto& b : down_blocks) h = b->forward(h);
   h = mid_block->forward(h);
-  return conv_out->forward(torch::silu(conv_norm_out->forward(h)));
+  h = conv_norm_out->forward(h);
+  return conv_out->forward(torch::silu_(h));
 }
 
 VaeDecoderImpl::VaeDecoderImpl(const AutoencoderKLConfig& c, const torch::TensorOptions& t) {
@@ -154,7 +155,8 @@ torch::Tensor VaeDecoderImpl::forward(const torch::Tensor& latent) {
   torch::Tensor h = conv_in->forward(latent);
   h = mid_block->forward(h);
   for (auto& b : up_blocks) h = b->forward(h);
-  return conv_out->forward(torch::silu(conv_norm_out->forward(h)));
+  h = conv_norm_out->forward(h);
+  return conv_out->forward(torch::silu_(h));
 }
 
 namespace {

@@ -3,6 +3,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "core/memory.h"
 #include "core/progress.h"
 #include "nn/checkpoint/config_json.h"
 #include "nn/checkpoint/state_dict_loader.h"
@@ -66,6 +67,8 @@ torch::Tensor run_image_diffusion(const ImageDiffusionModels& models, const std:
   };
   const int64_t factor = models.vae->config.scale_factor();
   if (condition_images.empty()) throw Error("image diffusion: no condition image");
+  if (models.image_encoder.is_empty())
+    throw Error("image diffusion: this model's networks were freed by an earlier run (free_networks_as_done)");
   for (const auto& image : condition_images) check_rgb(image);
   for (int64_t side : {s.width, s.height, s.condition_width, s.condition_height})
     if (side <= 0 || side % factor != 0)
@@ -87,11 +90,17 @@ torch::Tensor run_image_diffusion(const ImageDiffusionModels& models, const std:
   record("image_embeddings", embeddings);
 
   // 2. Condition latents.
-  std::vector<torch::Tensor> preprocessed;
+  // One image at a time: the VAE works on each image alone (its GroupNorms are per sample), and its
+  // activations at 512 px are about 1 GB per image in fp32.
+  std::vector<torch::Tensor> encoded;
   for (const auto& image : condition_images)
-    preprocessed.push_back(vae_preprocess(image, s.condition_width, s.condition_height));
-  torch::Tensor condition = models.vae->encode(torch::cat(preprocessed)).mode() * models.vae->config.scaling_factor;
+    encoded.push_back(models.vae->encode(vae_preprocess(image, s.condition_width, s.condition_height)).mode());
+  torch::Tensor condition = torch::cat(encoded) * models.vae->config.scaling_factor;
   record("cond_latents", condition);
+  if (s.free_networks_as_done) {  // the encoder, and what the encoding left in the heap
+    models.image_encoder = nullptr;
+    release_freed_memory();
+  }
   if (guidance) condition = torch::cat({torch::zeros_like(condition), condition});
 
   // 3. The sampling loop.
@@ -131,9 +140,16 @@ torch::Tensor run_image_diffusion(const ImageDiffusionModels& models, const std:
     progress_step("denoise", i + 1, scheduler.num_steps());
   }
 
-  // 4. Decode.
-  torch::Tensor images = models.vae->decode(latents / models.vae->config.scaling_factor);
-  images = (images / 2 + 0.5).clamp(0, 1).permute({0, 2, 3, 1}).contiguous();
+  if (s.free_networks_as_done) {
+    if (models.free_denoiser) models.free_denoiser();
+    release_freed_memory();
+  }
+
+  // 4. Decode, one image at a time as the encoding.
+  std::vector<torch::Tensor> decoded;
+  for (const torch::Tensor& latent : (latents / models.vae->config.scaling_factor).split(1))
+    decoded.push_back((models.vae->decode(latent) / 2 + 0.5).clamp(0, 1).permute({0, 2, 3, 1}));
+  torch::Tensor images = torch::cat(decoded).contiguous();
   record("images", images);
   return images;
 }

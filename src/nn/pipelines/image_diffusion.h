@@ -64,6 +64,7 @@ struct ImageDiffusionModels {
   AutoencoderKL& vae;
   Scheduler& scheduler;
   Denoiser denoiser;
+  std::function<void()> free_denoiser;  // frees the networks behind `denoiser` (free_networks_as_done)
 };
 
 struct ImageDiffusionSettings {
@@ -75,6 +76,9 @@ struct ImageDiffusionSettings {
   // Optional [B * images_per_condition, 4, height / f, width / f] N(0, 1) latents (before
   // init_noise_sigma, as diffusers' `latents=`); drawn from the noise source when undefined.
   torch::Tensor initial_latents;
+  // Free the image encoder once the conditions are encoded and the denoiser (free_denoiser) once the
+  // loop is done, before the decoding; `models` cannot run again afterwards.
+  bool free_networks_as_done = false;
 };
 
 // condition_images: uint8 RGB [H, W, 3] each. Returns float [B * images_per_condition, height, width, 3]

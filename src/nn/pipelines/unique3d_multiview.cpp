@@ -52,12 +52,14 @@ torch::Tensor MultiViewModel::run(const torch::Tensor& condition, const MultiVie
                                 extras.class_labels = labels.repeat(x.size(0) / kViews);
                                 extras.condition_latents = condition_latents;
                                 return unet->forward(x, t, embeddings, extras);
-                              }};
+                              },
+                              [this] { unet = nullptr; }};
   ImageDiffusionSettings settings;
   settings.width = settings.height = settings.condition_width = settings.condition_height = s.size;
   settings.images_per_condition = kViews;
   settings.steps = s.steps;
   settings.guidance_scale = s.guidance_scale;
+  settings.free_networks_as_done = s.free_networks_as_done;
   return run_image_diffusion(models, {condition}, settings, noise, trace);
 }
 

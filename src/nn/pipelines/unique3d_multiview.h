@@ -25,6 +25,9 @@ struct MultiViewSettings {
   int64_t size = 256;  // side of each view and of the encoded condition
   int steps = 30;
   double guidance_scale = 1.5;
+  // Free each network as soon as this run no longer needs it (docs/networks.md, "Memory"): the model
+  // cannot run again afterwards. The pipeline stages run each model once and set it.
+  bool free_networks_as_done = false;
 };
 
 class MultiViewModel {

@@ -33,11 +33,11 @@ std::unique_ptr<NormalModel> NormalModel::load(const std::filesystem::path& imag
   TensorMap weights = reader.read(unet_weights);
   TensorMap reference = take_prefix(weights, kRefUnetPrefix);
   // Unique3D loads with strict=False; the one part its file may lack is the reference UNet.
-  reader.apply(*m->unet->unet, weights, LoadPolicy{{std::string(kRefUnetPrefix) + "*"}, {}}, unet_weights.string());
+  reader.apply(*m->unet->unet, std::move(weights), LoadPolicy{{std::string(kRefUnetPrefix) + "*"}, {}}, unet_weights.string());
   if (reference.empty())
     reader.load(*m->unet->reference, base_unet_weights);
   else
-    reader.apply(*m->unet->reference, reference, {}, unet_weights.string() + " (" + kRefUnetPrefix + "*)");
+    reader.apply(*m->unet->reference, std::move(reference), {}, unet_weights.string() + " (" + kRefUnetPrefix + "*)");
   set_precision(*m->unet->unet, precision);  // the reference UNet is registered inside it
   return m;
 }
@@ -47,11 +47,13 @@ torch::Tensor NormalModel::run(const std::vector<torch::Tensor>& views, const No
   torch::NoGradGuard no_grad;
   ImageDiffusionModels models{parts.image_encoder, *parts.feature_extractor, parts.vae, *parts.scheduler,
                               [&](const torch::Tensor& x, const torch::Tensor& t, const torch::Tensor& embeddings,
-                                  const torch::Tensor& condition) { return unet->forward(x, t, embeddings, condition); }};
+                                  const torch::Tensor& condition) { return unet->forward(x, t, embeddings, condition); },
+                              [this] { unet.reset(); }};
   ImageDiffusionSettings settings;
   settings.width = settings.height = settings.condition_width = settings.condition_height = s.size;
   settings.steps = s.steps;
   settings.guidance_scale = s.guidance_scale;
+  settings.free_networks_as_done = s.free_networks_as_done;
   return run_image_diffusion(models, views, settings, noise, trace);
 }
 

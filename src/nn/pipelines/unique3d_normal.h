@@ -26,6 +26,9 @@ struct NormalSettings {
   int64_t size = 512;  // side of each normal map and of the encoded condition
   int steps = 30;
   double guidance_scale = 2.0;
+  // Free each network as soon as this run no longer needs it (docs/networks.md, "Memory"): the model
+  // cannot run again afterwards. The pipeline stages run each model once and set it.
+  bool free_networks_as_done = false;
 };
 
 class NormalModel {

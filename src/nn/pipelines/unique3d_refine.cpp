@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "core/error.h"
+#include "core/memory.h"
 #include "core/progress.h"
 #include "nn/checkpoint/config_json.h"
 #include "nn/checkpoint/diffusers_folder.h"
@@ -23,6 +24,14 @@ void check_rgb(const torch::Tensor& image, const std::string& what) {
       image.size(1) == 0)
     throw Error("refine: " + what + " must be uint8 RGB [H, W, 3], got " + c10::str(image.sizes()) + " " +
                 c10::toString(image.scalar_type()));
+}
+
+void check_views(const std::vector<torch::Tensor>& views) {
+  if (views.size() != size_t(kViews)) throw Error("refine: needs 4 views, got " + std::to_string(views.size()));
+  for (const auto& v : views) {
+    check_rgb(v, "each view");
+    if (v.sizes() != views[0].sizes()) throw Error("refine: the four views must have one size");
+  }
 }
 
 // app/utils.make_image_grid with rows=2: views 0 1 on top, 2 3 below.
@@ -83,14 +92,28 @@ std::unique_ptr<RefineEncoders> RefineEncoders::load(const RefineCheckpoints& c,
   m->image_encoder = ClipVisionModelWithProjection(
       ClipVisionConfig::from_json(read_json_file(f.image_encoder_config), f.image_encoder_config.string()), cpu);
   reader.load(*m->image_encoder, f.image_encoder_weights, clip_policy());
+  m->vae = AutoencoderKL(AutoencoderKLConfig::from_json(read_json_file(f.vae_config), f.vae_config.string()), cpu);
+  reader.load(*m->vae, f.vae_weights);
   set_precision(*m->text_encoder, precision);
   set_precision(*m->image_encoder, precision);
+  set_precision(*m->vae, precision);
   return m;
 }
 
-RefineConditioning RefineEncoders::encode(const torch::Tensor& front, const RefineSettings& s, TensorMap* trace) {
+RefineConditioning RefineEncoders::encode(const std::vector<torch::Tensor>& views, const torch::Tensor& front,
+                                          const RefineSettings& s, TensorMap* trace) {
   torch::NoGradGuard no_grad;
+  auto record = [trace](const std::string& name, const torch::Tensor& value) {
+    if (trace) (*trace)[name] = value;
+  };
+  if (text_encoder.is_empty() || vae.is_empty())
+    throw Error("refine: these encoders were freed by an earlier run (free_networks_as_done)");
+  check_views(views);
   check_rgb(front, "the front image");
+  const int64_t factor = vae->config.scale_factor() * 2;  // the grid splits into halves of whole latents
+  if (s.size <= 0 || s.size % factor != 0)
+    throw Error("refine: the size must be a positive multiple of " + std::to_string(factor) + ", got " +
+                std::to_string(s.size));
   const bool guidance = s.guidance_scale > 1.0;
   // Text embeddings [negative, prompt] and the front image's CLIP embedding [zeros, embedding].
   std::vector<std::string> prompts{s.prompt};
@@ -99,9 +122,27 @@ RefineConditioning RefineEncoders::encode(const torch::Tensor& front, const Refi
   out.prompt_embeds = text_encoder->forward(tokenizer->input_ids(prompts)).last_hidden_state;
   out.image_embeds = image_encoder->forward(feature_extractor->pixel_values(front)).image_embeds;
   if (guidance) out.image_embeds = torch::cat({torch::zeros_like(out.image_embeds), out.image_embeds});
-  if (trace) {
-    (*trace)["prompt_embeds"] = out.prompt_embeds;
-    (*trace)["image_embeds"] = out.image_embeds;
+  record("prompt_embeds", out.prompt_embeds);
+  record("image_embeds", out.image_embeds);
+  if (s.free_networks_as_done) {
+    text_encoder = nullptr;
+    image_encoder = nullptr;
+    release_freed_memory();
+  }
+
+  // Images: the grid, its bicubic resize as the control image (PIL's default filter, [0, 1]), and the
+  // VaeImageProcessor input (Lanczos, [-1, 1]) that the VAE encodes.
+  const torch::Tensor grid = make_grid(views);
+  record("grid", grid);
+  out.control = pil_resize(grid, s.size, s.size, PilFilter::Bicubic);
+  out.control = (out.control.to(torch::kFloat) / 255.0f).permute({2, 0, 1}).unsqueeze(0);
+  record("control_image", out.control);
+  const torch::Tensor init_image = vae_preprocess(grid, s.size, s.size);
+  record("init_image", init_image);
+  out.grid = vae->encode(init_image);
+  if (s.free_networks_as_done) {
+    vae = nullptr;
+    release_freed_memory();
   }
   return out;
 }
@@ -128,21 +169,14 @@ std::unique_ptr<RefineModel> RefineModel::load(const RefineCheckpoints& c, Preci
   return m;
 }
 
-torch::Tensor RefineModel::run(const std::vector<torch::Tensor>& views, const RefineConditioning& conditioning,
-                               const RefineSettings& s, NoiseSource& noise, TensorMap* trace) {
+torch::Tensor RefineModel::run(const RefineConditioning& conditioning, const RefineSettings& s, NoiseSource& noise,
+                               TensorMap* trace) {
   torch::NoGradGuard no_grad;
   auto record = [trace](const std::string& name, const torch::Tensor& value) {
     if (trace) (*trace)[name] = value;
   };
-  if (views.size() != size_t(kViews)) throw Error("refine: needs 4 views, got " + std::to_string(views.size()));
-  for (const auto& v : views) {
-    check_rgb(v, "each view");
-    if (v.sizes() != views[0].sizes()) throw Error("refine: the four views must have one size");
-  }
-  const int64_t factor = vae->config.scale_factor() * 2;  // the grid splits into halves of whole latents
-  if (s.size <= 0 || s.size % factor != 0)
-    throw Error("refine: the size must be a positive multiple of " + std::to_string(factor) + ", got " +
-                std::to_string(s.size));
+  if (unet.is_empty())
+    throw Error("refine: this model's networks were freed by an earlier run (free_networks_as_done)");
   if (s.steps < 1 || !(s.strength > 0.0 && s.strength <= 1.0))
     throw Error("refine: steps must be at least 1 and strength in (0, 1]");
   const int run_steps = std::min(static_cast<int>(s.steps * s.strength), s.steps);
@@ -152,23 +186,17 @@ torch::Tensor RefineModel::run(const std::vector<torch::Tensor>& views, const Re
   const bool guidance = s.guidance_scale > 1.0;
   const int64_t batch = guidance ? 2 : 1;
   const torch::Tensor& prompt_embeds = conditioning.prompt_embeds;
+  const int64_t latent_side = s.size / vae->config.scale_factor();
   if (!prompt_embeds.defined() || !conditioning.image_embeds.defined() || prompt_embeds.dim() != 3 ||
-      prompt_embeds.size(0) != batch || conditioning.image_embeds.size(0) != batch)
-    throw Error("refine: the conditioning does not fit the settings (RefineEncoders::encode with the same guidance)");
+      prompt_embeds.size(0) != batch || conditioning.image_embeds.size(0) != batch ||
+      !conditioning.control.defined() || conditioning.control.dim() != 4 || conditioning.control.size(2) != s.size ||
+      !conditioning.grid.mean.defined() || conditioning.grid.mean.dim() != 4 ||
+      conditioning.grid.mean.size(2) != latent_side)
+    throw Error("refine: the conditioning does not fit the settings (RefineEncoders::encode with the same settings)");
   ip_adapter->set_scale(s.ip_adapter_scale);
 
-  // Images: the grid, its bicubic resize as the control image (PIL's default filter, [0, 1]), and the
-  // VaeImageProcessor input (Lanczos, [-1, 1]).
-  const torch::Tensor grid = make_grid(views);
-  record("grid", grid);
-  torch::Tensor control = pil_resize(grid, s.size, s.size, PilFilter::Bicubic);
-  control = (control.to(torch::kFloat) / 255.0f).permute({2, 0, 1}).unsqueeze(0);
-  record("control_image", control);
-  const torch::Tensor init_image = vae_preprocess(grid, s.size, s.size);
-  record("init_image", init_image);
-
   const torch::Tensor unet_context = ip_adapter->context(prompt_embeds, conditioning.image_embeds);
-  if (guidance) control = torch::cat({control, control});
+  const torch::Tensor control = guidance ? torch::cat({conditioning.control, conditioning.control}) : conditioning.control;
 
   // img2img start (diffusers' get_timesteps): the schedule for all steps, entered at step `start`.
   auto* sigma_scheduler = dynamic_cast<SigmaScheduler*>(scheduler.get());
@@ -176,7 +204,7 @@ torch::Tensor RefineModel::run(const std::vector<torch::Tensor>& views, const Re
   scheduler->set_timesteps(s.steps);
   const int start = s.steps - run_steps;
   record("timesteps", scheduler->timesteps().narrow(0, start, run_steps));
-  const LatentDistribution posterior = vae->encode(init_image);
+  const LatentDistribution& posterior = conditioning.grid;
   const torch::Tensor init_latents =
       (posterior.mean + posterior.std() * noise.randn(posterior.mean.sizes())) * vae->config.scaling_factor;
   record("init_latents", init_latents);
@@ -199,6 +227,12 @@ torch::Tensor RefineModel::run(const std::vector<torch::Tensor>& views, const Re
     progress_step("denoise", i - start + 1, run_steps);
   }
 
+  if (s.free_networks_as_done) {
+    unet = nullptr;
+    ip_adapter = nullptr;
+    controlnet = nullptr;
+    release_freed_memory();
+  }
   torch::Tensor image = vae->decode(latents / vae->config.scaling_factor);
   image = (image / 2 + 0.5).clamp(0, 1).permute({0, 2, 3, 1})[0];  // [size, size, 3]
   record("images", image);

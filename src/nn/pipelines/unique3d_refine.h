@@ -61,32 +61,45 @@ struct RefineSettings {
   double ip_adapter_scale = 1.0;
   std::string prompt = "4views, multiview";
   std::string negative_prompt;  // empty, as the official call ends up (see above)
+  // Free each network as soon as this run no longer needs it (docs/networks.md, "Memory"): the model
+  // cannot run again afterwards. The pipeline stages run each model once and set it. RefineEncoders
+  // frees its CLIP encoders before encoding the grid and its VAE after; RefineModel frees the UNet,
+  // IP-Adapter and ControlNet before decoding.
+  bool free_networks_as_done = false;
 };
 
-// What the two encoders make of the prompt and the front image: the conditioning of every step.
+// What the encoding half makes of the prompt, the front image and the four views: everything the
+// denoising half needs besides its networks.
 struct RefineConditioning {
   torch::Tensor prompt_embeds;  // [2, 77, D]: [negative, prompt] with guidance, else [1, 77, D]
   torch::Tensor image_embeds;   // [2, E]: [zeros, front image] with guidance, else [1, E]
+  torch::Tensor control;        // [1, 3, size, size] in [0, 1]: the grid resized with PIL's default (bicubic)
+  LatentDistribution grid;      // the VAE posterior of the grid (VaeImageProcessor: Lanczos, [-1, 1])
 };
 
 // The refinement comes in two halves, loaded one after the other so that their weights never share
-// memory: the encoders (CLIP text encoder and the IP-Adapter's ViT-H/14 image encoder, about 3.0 GB in
-// fp32) run once and are freed before the denoising half (UNet with IP-Adapter, ControlNet, VAE, about
-// 5.3 GB) loads. Each load() checks that every file of both halves is there (an Error names the first
+// memory: the encoders (CLIP text encoder, the IP-Adapter's ViT-H/14 image encoder and the VAE, about
+// 3.3 GB in fp32) run once and are freed before the denoising half (UNet with IP-Adapter, ControlNet and
+// the VAE again for decoding, about 5.3 GB) loads. Encoding the 1024 px grid takes about 3 GB of
+// activations in fp32; in the encoding half, with its CLIP encoders freed first, they meet no other weights. Each load() checks that every file of both halves is there (an Error names the first
 // missing one and where it comes from) before reading any weights, then loads and converts to
 // `precision`; with a checking `reader` the model is built on the meta device, only to check the checkpoints.
 class RefineEncoders {
  public:
   static std::unique_ptr<RefineEncoders> load(const RefineCheckpoints& checkpoints, Precision precision,
                                               const CheckpointReader& reader = {});
-  // front: uint8 RGB [H, W, 3], the front image on white (the official app passes the input image,
-  // upscaled, alpha composited on white). `trace`, when given, receives prompt_embeds and image_embeds.
-  RefineConditioning encode(const torch::Tensor& front, const RefineSettings& settings, TensorMap* trace = nullptr);
+  // views: the four views, uint8 RGB [H, W, 3] of one size, in the multi-view model's order (pasted as
+  // the grid [0 1; 2 3]); front: uint8 RGB [H, W, 3], the front image on white (the official app passes
+  // the input image, upscaled, alpha composited on white). `trace`, when given, receives grid,
+  // control_image, init_image, prompt_embeds and image_embeds.
+  RefineConditioning encode(const std::vector<torch::Tensor>& views, const torch::Tensor& front,
+                            const RefineSettings& settings, TensorMap* trace = nullptr);
 
   std::unique_ptr<ClipTokenizer> tokenizer;
   ClipTextModel text_encoder{nullptr};
   std::unique_ptr<ClipImageProcessor> feature_extractor;
   ClipVisionModelWithProjection image_encoder{nullptr};
+  AutoencoderKL vae{nullptr};
 };
 
 class RefineModel {
@@ -96,13 +109,11 @@ class RefineModel {
   // The files the two halves read, checked to exist (an Error names the first missing one); reads nothing.
   static std::vector<std::filesystem::path> files(const RefineCheckpoints& checkpoints);
 
-  // views: the four views, uint8 RGB [H, W, 3] of one size, in the multi-view model's order (pasted as
-  // the grid [0 1; 2 3]); conditioning: RefineEncoders::encode with the same settings. Returns float
+  // conditioning: RefineEncoders::encode with the same settings. Returns the four refined views, float
   // [4, size / 2, size / 2, 3] in [0, 1]. Reports progress_step("denoise", i, n) per step. `trace`, when
-  // given, receives grid, control_image, init_image, timesteps, init_latents, latents.<i> (before step i
-  // of the run) and images.
-  torch::Tensor run(const std::vector<torch::Tensor>& views, const RefineConditioning& conditioning,
-                    const RefineSettings& settings, NoiseSource& noise, TensorMap* trace = nullptr);
+  // given, receives timesteps, init_latents, latents.<i> (before step i of the run) and images.
+  torch::Tensor run(const RefineConditioning& conditioning, const RefineSettings& settings, NoiseSource& noise,
+                    TensorMap* trace = nullptr);
 
   UNet2DConditionModel unet{nullptr};
   IpAdapter ip_adapter{nullptr};
