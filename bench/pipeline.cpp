@@ -1,7 +1,7 @@
 // `generate` end to end at the official sizes and defaults with random weights: writes a model folder in
 // the official layout with every network at full size and random weights once (bench/random_models.h,
 // cached, ~11 GB), then runs the library's generate() on a bundled photo and prints each stage's time
-// and the process's peak memory after it. The mesh is nonsense; the work is the real work.
+// and its own peak memory (the process's, from the stage's start). The mesh is nonsense; the work is real.
 // Usage: bench_pipeline [--models DIR] [--photo PNG] [--dtype auto|fp32|bf16] [--steps N] [--refine-steps N]
 //                       [--no-refine] [--keep DIR] [--write-only]
 #include <CLI/CLI.hpp>

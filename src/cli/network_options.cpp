@@ -17,7 +17,8 @@ void add_network_options(CLI::App& sub, NetworkArgs& args, bool seeded) {
                  "Folder with the network weights: the official release's ckpt/ folder (docs/models.md)")
       ->required();
   sub.add_option("--dtype", args.dtype,
-                 "Precision of the networks: auto (bf16 on CPUs with avx512_bf16, else fp32), fp32 or bf16")
+                 "Precision of the networks: auto (bf16 on CPUs with avx512_bf16, else fp32), fp32, bf16, or fp16 "
+                 "(CUDA only: on the CPU it is refused)")
       ->capture_default_str()
       ->check(CLI::IsMember({"auto", "fp32", "bf16", "fp16"}));
   if (seeded)

@@ -5,6 +5,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/memory.h"
 #include "core/view_set.h"
 #include "nn/pipelines/input_photo.h"
 #include "nn/preprocess/pil_resize.h"
@@ -277,7 +278,8 @@ GenerateSummary generate(const GenerateRequest& request, ProgressListener* liste
   run.summary.precision = resolve_precision(request.network);
   for (int s = kPrepare; s < kStageCount; ++s) {
     if (s >= start) {
-      reset_peak_memory();  // each stage reports its own peak
+      release_freed_memory();  // what the stage before left in the heap
+      reset_peak_memory();     // each stage reports its own peak
       run.run(Stage(s), photo);
     } else {
       // The front image is needed to the end; the views only from the stage before the first to run.

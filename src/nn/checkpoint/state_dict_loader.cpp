@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/memory.h"
 
 namespace u3d::nn {
 namespace {
@@ -174,9 +175,11 @@ LoadReport load_state_dict(torch::nn::Module& module, TensorMap weights, const L
   LoadReport& report = plan.report;
   auto& targets = plan.targets;
   torch::NoGradGuard no_grad;
+  constexpr size_t kReleaseEveryBytes = size_t(256) << 20;
+  size_t freed_bytes = 0;
   for (auto& [key, entry] : plan.sources) {
     torch::Tensor& target = targets.at(key);
-    const torch::Tensor src = entry.second;
+    torch::Tensor src = entry.second;
     if (src.scalar_type() != target.scalar_type()) {
       report.converted.push_back(key + ": " + c10::toString(src.scalar_type()) + " -> " +
                                  c10::toString(target.scalar_type()));
@@ -185,6 +188,14 @@ LoadReport load_state_dict(torch::nn::Module& module, TensorMap weights, const L
     ++report.loaded;
     entry.second = torch::Tensor();  // the last handle to the file's tensor: its memory goes now
     weights.erase(entry.first);
+    // The allocator keeps freed blocks (core/memory.h): hand them back as the load goes, or the file's
+    // tensors would stay resident beside the module until the end.
+    freed_bytes += src.nbytes();
+    if (freed_bytes >= kReleaseEveryBytes) {
+      src = torch::Tensor();
+      release_freed_memory();
+      freed_bytes = 0;
+    }
   }
   return report;
 }
