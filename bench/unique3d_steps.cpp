@@ -1,16 +1,19 @@
 // One denoising step of each Unique3D model at its official size, full-size random weights, on the CPU
-// with every core:
-//  - multi-view (img2mvimg): 4 views at 256 px with guidance, so the UNet sees batch 8 at 32x32 latents
+// with every core, run as the pipelines run it: the guidance halves one after the other
+// (nn/pipelines/guidance.h):
+//  - multi-view (img2mvimg): 4 views at 256 px, so the UNet sees two batches of 4 at 32x32 latents
 //    with joint attention over the 4 views, class labels and the concatenated condition latents;
-//  - normal (image2normal), per view: 512 px with guidance, a reference pass over the condition latents
-//    and the main UNet, each batch 2 at 64x64 (the official pipeline batches the 4 views: 4x this);
-//  - refine (SD 1.5 + tile ControlNet + IP-Adapter): the 1024 px grid with guidance, the ControlNet and
-//    the UNet each batch 2 at 128x128 latents (16,384 tokens in the first level's self-attention), the
+//  - normal (image2normal): the 4 views at 512 px, per half a reference pass over the 4 condition
+//    latents and the main UNet, each batch 4 at 64x64;
+//  - refine (SD 1.5 + tile ControlNet + IP-Adapter): the 1024 px grid, per half the ControlNet and the
+//    UNet each batch 1 at 128x128 latents (16,384 tokens in the first level's self-attention), the
 //    UNet's context 77 text + 4 image tokens.
-// Prints seconds per step (median of --repetitions, default 3) and peak RSS (of the whole process: run
-// one step kind with --only to see its own). A full run is 30 steps each for the first two, 10 for refine.
+// Prints seconds per step (median of --repetitions, default 3), the resident memory before the first
+// step (the weights) and the peak RSS (of the whole process: run one step kind with --only to see its
+// own; GB here are GiB). A full run is 30 steps each for the first two, 10 for refine.
 // Usage: bench_unique3d_steps [--dtype=fp32|bf16] [--repetitions=N] [--only=multiview|normal|refine]
 #include <sys/resource.h>
+#include <unistd.h>
 #include <torch/torch.h>
 
 #include <algorithm>
@@ -28,6 +31,7 @@
 #include "nn/models/ip_adapter.h"
 #include "nn/models/unet.h"
 #include "nn/models/unet_reference.h"
+#include "nn/pipelines/guidance.h"
 #include "nn/precision.h"
 #include "nn/runtime.h"
 
@@ -49,6 +53,16 @@ double median_seconds(int repetitions, const std::function<void()>& step) {
   }
   std::sort(times.begin(), times.end());
   return times[times.size() / 2];
+}
+
+// The resident memory now (the weights, before a step), from /proc/self/statm; 0 where it is not readable.
+double resident_gb() {
+  long pages_total = 0, pages_resident = 0;
+  if (std::FILE* f = std::fopen("/proc/self/statm", "r")) {
+    if (std::fscanf(f, "%ld %ld", &pages_total, &pages_resident) != 2) pages_resident = 0;
+    std::fclose(f);
+  }
+  return static_cast<double>(pages_resident) * static_cast<double>(sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0 * 1024.0);
 }
 
 double peak_rss_gb() {
@@ -87,23 +101,35 @@ int main(int argc, char** argv) try {
     randomize_parameters(*unet, 0.02);
     set_precision(*unet, precision);
     set_attention_processors(*unet, self_attention_only(std::make_shared<MultiViewAttentionProcessor>(4)));
-    torch::Tensor x = torch::randn({8, 4, 32, 32}), context = torch::randn({8, 1, 768});
-    UNetExtras extras;
-    extras.class_labels = torch::arange(4, torch::kLong).repeat(2);
-    extras.condition_latents = torch::randn({2, 4, 32, 32});
-    const double s = median_seconds(repetitions, [&] { unet->forward(x, torch::tensor(500.0f), context, extras); });
-    std::printf("multi-view step (batch 8 at 32x32, 4 joint views)  %s: %6.2f s   peak RSS %.2f GB\n",
-                precision_name(precision), s, peak_rss_gb());
+    torch::Tensor x = torch::randn({4, 4, 32, 32}), context = torch::randn({8, 1, 768});
+    torch::Tensor condition = torch::randn({2, 4, 32, 32});
+    const double before = resident_gb();
+    const double s = median_seconds(repetitions, [&] {
+      guided_prediction(1.5, [&](GuidanceHalf half) {
+        UNetExtras extras;
+        extras.class_labels = torch::arange(4, torch::kLong);
+        extras.condition_latents = batch_half(condition, half);
+        return unet->forward(x, torch::tensor(500.0f), batch_half(context, half), extras);
+      });
+    });
+    std::printf("multi-view step (two halves of batch 4 at 32x32, 4 joint views)  %s: %6.2f s   resident before %.2f GB, peak RSS %.2f GB\n",
+                precision_name(precision), s, before, peak_rss_gb());
   }
   if (wanted("normal")) {
     ReferenceUNet model(manifest_config("unet_unique3d_image2normal"), options);
     randomize_parameters(*model.unet, 0.02);  // the reference UNet is registered inside it
     set_precision(*model.unet, precision);
-    torch::Tensor x = torch::randn({2, 4, 64, 64}), context = torch::randn({2, 1, 768});
-    torch::Tensor condition = torch::randn({2, 4, 64, 64});
-    const double s = median_seconds(repetitions, [&] { model.forward(x, torch::tensor(500.0f), context, condition); });
-    std::printf("normal step per view (reference + main, batch 2 at 64x64) %s: %6.2f s   peak RSS %.2f GB\n",
-                precision_name(precision), s, peak_rss_gb());
+    torch::Tensor x = torch::randn({4, 4, 64, 64}), context = torch::randn({8, 1, 768});
+    torch::Tensor condition = torch::randn({8, 4, 64, 64});
+    const double before = resident_gb();
+    const double s = median_seconds(repetitions, [&] {
+      guided_prediction(1.5, [&](GuidanceHalf half) {
+        return model.forward(x, torch::tensor(500.0f), batch_half(context, half), batch_half(condition, half));
+      });
+    });
+    std::printf("normal step (4 views: reference + main, two halves of batch 4 at 64x64) %s: %6.2f s (%.2f s a view)"
+                "   resident before %.2f GB, peak RSS %.2f GB\n",
+                precision_name(precision), s, s / 4, before, peak_rss_gb());
   }
   if (wanted("refine")) {
     // SD 1.5's UNet has the sd-image-variations architecture (cross-attention dim 768).
@@ -117,18 +143,23 @@ int main(int argc, char** argv) try {
       randomize_parameters(*m, 0.02);
       set_precision(*m, precision);
     }
-    torch::Tensor x = torch::randn({2, 4, 128, 128}), text = torch::randn({2, 77, 768});
+    torch::Tensor x = torch::randn({1, 4, 128, 128}), text = torch::randn({2, 77, 768});
     torch::Tensor context = adapter->context(text, torch::randn({2, 1024}));
-    torch::Tensor control = torch::rand({2, 3, 1024, 1024});
+    torch::Tensor control = torch::rand({1, 3, 1024, 1024});
+    const double before = resident_gb();
     const double s = median_seconds(repetitions, [&] {
-      ControlNetOutput residuals = controlnet->forward(x, torch::tensor(500.0f), text, control);
-      UNetExtras extras;
-      extras.down_block_additional_residuals = residuals.down_block_res_samples;
-      extras.mid_block_additional_residual = residuals.mid_block_res_sample;
-      unet->forward(x, torch::tensor(500.0f), context, extras);
+      guided_prediction(5.0, [&](GuidanceHalf half) {
+        UNetExtras extras;
+        {
+          ControlNetOutput residuals = controlnet->forward(x, torch::tensor(500.0f), batch_half(text, half), control);
+          extras.down_block_additional_residuals = std::move(residuals.down_block_res_samples);
+          extras.mid_block_additional_residual = std::move(residuals.mid_block_res_sample);
+        }
+        return unet->forward(x, torch::tensor(500.0f), batch_half(context, half), extras);
+      });
     });
-    std::printf("refine step (ControlNet + UNet with IP-Adapter, batch 2 at 128x128) %s: %6.2f s   peak RSS %.2f GB\n",
-                precision_name(precision), s, peak_rss_gb());
+    std::printf("refine step (ControlNet + UNet with IP-Adapter, two halves of batch 1 at 128x128) %s: %6.2f s   resident before %.2f GB, peak RSS %.2f GB\n",
+                precision_name(precision), s, before, peak_rss_gb());
   }
   return 0;
 } catch (const std::exception& e) {

@@ -1,12 +1,14 @@
 // The sampling loop of Unique3D's image-conditioned pipelines against the official pipelines' 2-step
 // traces with injected noise: the multi-view model (golden unet_mv: four views of one image, guidance
-// 1.5) and the normal model (golden unet_ref: two condition images, guidance 2.0).
+// 1.5) and the normal model (golden unet_ref: two condition images, guidance 2.0). The official traces
+// run the guidance halves as one doubled batch; ours runs them one after the other (guidance.h).
 #include "nn/pipelines/image_diffusion.h"
 
 #include <gtest/gtest.h>
 
 #include "golden.h"
 #include "nn/layers/multiview_attention.h"
+#include "nn/pipelines/guidance.h"
 #include "nn/models/unet.h"
 #include "nn/models/unet_reference.h"
 #include "nn/schedulers/scheduler_config.h"
@@ -73,7 +75,7 @@ TEST(ImageDiffusion, MultiViewPipelineMatchesTheOfficialTrace) {
                                 extras.class_labels = labels.repeat(x.size(0) / 4);
                                 extras.condition_latents = condition;
                                 return unet->forward(x, t, embeddings, extras);
-                              }};
+                              }, nullptr};
   auto in = golden_tensors("unet_mv", "inputs");
   auto ref = golden_tensors("unet_mv", "outputs");
   ImageDiffusionSettings settings;
@@ -100,7 +102,7 @@ TEST(ImageDiffusion, NormalPipelineWithReferenceUNetMatchesTheOfficialTrace) {
 
   ImageDiffusionModels models{shared.clip, shared.processor, shared.vae, *shared.scheduler,
                               [&](const torch::Tensor& x, const torch::Tensor& t, const torch::Tensor& embeddings,
-                                  const torch::Tensor& condition) { return model.forward(x, t, embeddings, condition); }};
+                                  const torch::Tensor& condition) { return model.forward(x, t, embeddings, condition); }, nullptr};
   auto in = golden_tensors("unet_ref", "inputs");
   auto ref = golden_tensors("unet_ref", "outputs");
   const torch::Tensor image = golden_tensors("unet_mv", "inputs")["pipe.test_image_uint8"];
@@ -124,7 +126,7 @@ TEST(ImageDiffusion, SeededRunsRepeatAndBadInputsAreRejected) {
   load_golden_weights(*unet, "unet_base");
   ImageDiffusionModels models{shared.clip, shared.processor, shared.vae, *shared.scheduler,
                               [&](const torch::Tensor& x, const torch::Tensor& t, const torch::Tensor& e,
-                                  const torch::Tensor&) { return unet->forward(x, t, e); }};
+                                  const torch::Tensor&) { return unet->forward(x, t, e); }, nullptr};
   const torch::Tensor image = golden_tensors("unet_mv", "inputs")["pipe.test_image_uint8"];
   ImageDiffusionSettings settings;
   settings.width = settings.height = settings.condition_width = settings.condition_height = 32;
@@ -143,6 +145,29 @@ TEST(ImageDiffusion, SeededRunsRepeatAndBadInputsAreRejected) {
   ImageDiffusionSettings wrong = settings;
   wrong.initial_latents = torch::zeros({2, 4, 4, 4});
   EXPECT_THROW(run_image_diffusion(models, {image}, wrong, noise), u3d::Error);
+}
+
+TEST(Guidance, RunsTheUnconditionalHalfFirstAndCombinesAsTheDoubledBatch) {
+  const torch::Tensor doubled = torch::arange(12, torch::kFloat).reshape({4, 3});
+  std::vector<GuidanceHalf> order;
+  GuidedPrediction guided = guided_prediction(
+      3.0,
+      [&](GuidanceHalf half) {
+        order.push_back(half);
+        return batch_half(doubled, half) * 2;
+      },
+      /*keep_raw=*/true);
+  EXPECT_EQ(order, (std::vector<GuidanceHalf>{GuidanceHalf::kUnconditional, GuidanceHalf::kConditional}));
+  const auto halves = (doubled * 2).chunk(2);
+  EXPECT_TRUE(torch::allclose(guided.combined, halves[0] + 3.0 * (halves[1] - halves[0])));
+  EXPECT_TRUE(torch::equal(guided.raw, doubled * 2));
+  EXPECT_FALSE(guided_prediction(3.0, [&](GuidanceHalf half) { return batch_half(doubled, half); }).raw.defined());
+  EXPECT_TRUE(torch::equal(batch_half(doubled, GuidanceHalf::kConditional), doubled.narrow(0, 2, 2)));
+  EXPECT_THROW(batch_half(torch::zeros({3, 2}), GuidanceHalf::kUnconditional), u3d::Error);
+  EXPECT_THROW(guided_prediction(2.0, [](GuidanceHalf half) {
+                 return torch::zeros({half == GuidanceHalf::kConditional ? 2 : 1});
+               }),
+               u3d::Error);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include "core/progress.h"
 #include "nn/checkpoint/config_json.h"
 #include "nn/checkpoint/state_dict_loader.h"
+#include "nn/pipelines/guidance.h"
 #include "nn/schedulers/scheduler_config.h"
 #include "nn/preprocess/pil_resize.h"
 
@@ -115,19 +116,27 @@ torch::Tensor run_image_diffusion(const ImageDiffusionModels& models, const std:
   latents = latents * scheduler.init_noise_sigma();
   for (int i = 0; i < scheduler.num_steps(); ++i) {
     const std::string step = "step" + std::to_string(i);
-    torch::Tensor input = scheduler.scale_model_input(guidance ? torch::cat({latents, latents}) : latents, i);
+    const torch::Tensor input = scheduler.scale_model_input(latents, i);
     const torch::Tensor t = scheduler.timestep(i);
-    torch::Tensor prediction = models.denoiser(input, t, embeddings, condition);
-    if (trace) {
-      record(step + ".unet.latent_model_input", input);
+    torch::Tensor prediction, raw;
+    if (guidance) {
+      GuidedPrediction guided = guided_prediction(
+          s.guidance_scale,
+          [&](GuidanceHalf half) {
+            return models.denoiser(input, t, batch_half(embeddings, half), batch_half(condition, half));
+          },
+          trace != nullptr);
+      prediction = guided.combined;
+      raw = guided.raw;
+    } else {
+      prediction = raw = models.denoiser(input, t, embeddings, condition);
+    }
+    if (trace) {  // as the official doubled batch
+      record(step + ".unet.latent_model_input", guidance ? torch::cat({input, input}) : input);
       record(step + ".unet.timestep", t);
       record(step + ".unet.encoder_hidden_states", embeddings);
       record(step + ".unet.condition_latents", condition);
-      record(step + ".unet.noise_pred_raw", prediction);
-    }
-    if (guidance) {
-      auto halves = prediction.chunk(2);
-      prediction = halves[0] + s.guidance_scale * (halves[1] - halves[0]);
+      record(step + ".unet.noise_pred_raw", raw);
     }
     SchedulerStep next = scheduler.step(prediction, i, latents, noise);
     if (trace) {

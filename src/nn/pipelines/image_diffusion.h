@@ -7,8 +7,9 @@
 //     images_per_condition outputs; with guidance, zeros in front for the unconditional half;
 //  2. condition latents: VaeImageProcessor (Pillow Lanczos resize, [-1, 1]), VAE encode, mode times
 //     the scaling factor; with guidance, zeros in front;
-//  3. latents N(0, 1) times init_noise_sigma; per step the batch is doubled for guidance, scaled, run
-//     through the denoiser, combined as uncond + g (cond - uncond), and stepped by the scheduler;
+//  3. latents N(0, 1) times init_noise_sigma; per step scaled, run through the denoiser (with guidance
+//     once per half, nn/pipelines/guidance.h, where the official code doubles the batch), combined as
+//     uncond + g (cond - uncond), and stepped by the scheduler;
 //  4. VAE decode of latents / scaling, (x / 2 + 0.5) clamped to [0, 1].
 // The denoiser is a function, so the multi-view UNet (class labels, concatenated condition) and the
 // reference UNet (reference pass over the condition) plug in unchanged.
