@@ -87,8 +87,10 @@ std::vector<Image> run_upscale_stage(const std::vector<Image>& images, const Net
   auto model = nn::UpscaleModel::load(folder.upscaler(), summary.precision);
   summary.timings.push_back({"load upscaler", load_timer.finish()});
   StageTimer timer("upscaling x4");
+  std::vector<torch::Tensor> inputs;
+  for (const Image& image : images) inputs.push_back(image_to_uint8(image));
   std::vector<Image> out;
-  for (const Image& image : images) out.push_back(tensor_to_image(model->upscale(image_to_uint8(image))));
+  for (const torch::Tensor& upscaled : model->upscale(inputs)) out.push_back(tensor_to_image(upscaled));
   summary.timings.push_back({"upscale", timer.finish()});
   summary.peak_memory_mib = peak_memory_mib();
   return out;

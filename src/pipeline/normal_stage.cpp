@@ -115,10 +115,10 @@ ViewSetImages run_normal_stage(const std::array<Image, 4>& views, const NetworkO
     auto upscaler = nn::UpscaleModel::load(folder.upscaler(), summary.precision);
     summary.timings.push_back({"load upscaler", load_upscaler.finish()});
     StageTimer upscale_timer("upscaling the normal maps x4");
-    for (torch::Tensor& map : normal_maps)
-      map = upscaler->upscale(map.mul(255).round().clamp(0, 255).to(torch::kUInt8).contiguous())
-                .to(torch::kFloat)
-                .div(255);
+    std::vector<torch::Tensor> bytes;
+    for (const torch::Tensor& map : normal_maps) bytes.push_back(map.mul(255).round().clamp(0, 255).to(torch::kUInt8).contiguous());
+    std::vector<torch::Tensor> upscaled = upscaler->upscale(bytes);
+    for (size_t i = 0; i < normal_maps.size(); ++i) normal_maps[i] = upscaled[i].to(torch::kFloat).div(255);
     summary.timings.push_back({"upscale normals", upscale_timer.finish()});
   }
   summary.peak_memory_mib = peak_memory_mib();

@@ -103,8 +103,8 @@ TEST(RealEsrgan, TilesEqualTheWholeImageAwayFromSeams) {
   RRDBNet net = load_rrdbnet(golden_dir("realesrgan_tiny") / "weights.safetensors");
   torch::manual_seed(3);
   const torch::Tensor image = torch::rand({1, 3, 512, 512});
-  const torch::Tensor whole = upscale_tiled(*net, image, 0, "test");
-  const torch::Tensor tiled = upscale_tiled(*net, image, 200, "test");
+  const torch::Tensor whole = upscale_tiled(*net, image, 0);
+  const torch::Tensor tiled = upscale_tiled(*net, image, 200);
   ASSERT_EQ(tiled.sizes(), whole.sizes());
 
   // Distance in input pixels of each output row/column to the nearest seam (tile edges at 200 and 400).
@@ -140,6 +140,34 @@ TEST(RealEsrgan, RgbaKeepsAnUpscaledAlpha) {
   const torch::Tensor grey = model.upscale(rgba.slice(2, 3, 4).expand({12, 16, 3}).contiguous()).to(torch::kFloat);
   const torch::Tensor luma = 0.299 * grey.select(2, 0) + 0.587 * grey.select(2, 1) + 0.114 * grey.select(2, 2);
   EXPECT_LE((out.select(2, 3).to(torch::kFloat) - luma).abs().max().item<double>(), 1.0);
+}
+
+// A set of images is one loop of progress over all their tiles (an RGBA image's alpha runs a second
+// time), so the time left is the set's; each image comes out as it does alone; a bad image anywhere
+// stops the set before any runs.
+TEST(RealEsrgan, ASetOfImagesIsOneLoopOverAllItsTiles) {
+  struct Steps : ProgressListener {
+    std::vector<std::pair<int, int>> seen;
+    void on_event(const ProgressEvent& e) override {
+      if (e.kind == ProgressEvent::Kind::Step && e.text == "upscale") seen.emplace_back(e.step, e.steps);
+    }
+  } steps;
+  ProgressScope scope(&steps);
+  UpscaleModel model;
+  model.net = load_rrdbnet(golden_dir("realesrgan_tiny") / "weights.safetensors");
+  model.tile = 8;
+  torch::manual_seed(5);
+  const torch::Tensor rgb = torch::randint(0, 256, {12, 16, 3}, torch::kUInt8);   // 2 x 2 tiles
+  const torch::Tensor rgba = torch::randint(0, 256, {8, 8, 4}, torch::kUInt8);    // 1 tile, twice
+  const std::vector<torch::Tensor> out = model.upscale({rgb, rgba});
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_EQ(steps.seen, (std::vector<std::pair<int, int>>{{1, 6}, {2, 6}, {3, 6}, {4, 6}, {5, 6}, {6, 6}}));
+  EXPECT_TRUE(torch::equal(out[0], model.upscale(rgb)));
+  EXPECT_TRUE(torch::equal(out[1], model.upscale(rgba)));
+
+  steps.seen.clear();
+  EXPECT_THROW(model.upscale({rgb, rgb.to(torch::kFloat)}), u3d::Error);
+  EXPECT_TRUE(steps.seen.empty());
 }
 
 }  // namespace

@@ -12,7 +12,9 @@
 #include <torch/torch.h>
 
 #include <filesystem>
+#include <functional>
 #include <memory>
+#include <vector>
 
 #include "nn/models/rrdbnet.h"
 #include "nn/precision.h"
@@ -23,17 +25,23 @@ inline constexpr int64_t kUpscaleFactor = 4;
 inline constexpr int64_t kTilePad = 10;       // RealESRGANer's tile_pad default, also run_sr_fast's
 inline constexpr int64_t kDefaultTile = 256;  // input pixels; 512 -> 2048 in 4 tiles, about 1 GB in fp32
 
+// How many runs of the network upscale_tiled makes over an h x w image.
+int64_t upscale_tile_count(int64_t h, int64_t w, int64_t tile);
+
 // Runs `net` over x [N, C, H, W] in tiles of `tile` x `tile` input pixels with kTilePad pixels of context
-// (tile <= 0, or an image no larger than one tile: one run over the whole image). Reports each tile with
-// progress_step(stage, i, tiles). Returns [N, out, 4H, 4W] in x's dtype, raw.
-torch::Tensor upscale_tiled(RRDBNetImpl& net, const torch::Tensor& x, int64_t tile, const std::string& stage);
+// (tile <= 0, or an image no larger than one tile: one run over the whole image), calling `on_tile` after
+// each run. Returns [N, out, 4H, 4W] in x's dtype, raw.
+torch::Tensor upscale_tiled(RRDBNetImpl& net, const torch::Tensor& x, int64_t tile,
+                            const std::function<void()>& on_tile = {});
 
 class UpscaleModel {
  public:
   // load_rrdbnet(path) (ONNX or basicsr checkpoint), converted to `precision` (check_precision_supported).
   static std::unique_ptr<UpscaleModel> load(const std::filesystem::path& path, Precision precision);
 
-  // image: uint8 [H, W, 3] RGB or [H, W, 4] RGBA. Returns uint8 [4H, 4W, same channels].
+  // Each image: uint8 [H, W, 3] RGB or [H, W, 4] RGBA (all checked before any runs). Returns uint8
+  // [4H, 4W, same channels] for each. Progress: one "upscale" loop over every tile of every image.
+  std::vector<torch::Tensor> upscale(const std::vector<torch::Tensor>& images);
   torch::Tensor upscale(const torch::Tensor& image);
 
   RRDBNet net{nullptr};
