@@ -1,13 +1,13 @@
 // One denoising step of each Unique3D model at its official size, full-size random weights, on the CPU
-// with every core, run as the pipelines run it: the guidance halves one after the other
-// (nn/pipelines/guidance.h):
-//  - multi-view (img2mvimg): 4 views at 256 px, so the UNet sees two batches of 4 at 32x32 latents
-//    with joint attention over the 4 views, class labels and the concatenated condition latents;
-//  - normal (image2normal): the 4 views at 512 px, per half a reference pass over the 4 condition
-//    latents and the main UNet, each batch 4 at 64x64;
-//  - refine (SD 1.5 + tile ControlNet + IP-Adapter): the 1024 px grid, per half the ControlNet and the
-//    UNet each batch 1 at 128x128 latents (16,384 tokens in the first level's self-attention), the
-//    UNet's context 77 text + 4 image tokens.
+// with every core, run as the pipelines run it:
+//  - multi-view (img2mvimg): 4 views at 256 px, the guidance halves one after the other
+//    (nn/pipelines/guidance.h), so the UNet sees two batches of 4 at 32x32 latents with joint attention
+//    over the 4 views, class labels and the concatenated condition latents;
+//  - normal (image2normal): the 4 views at 512 px, per guidance half a reference pass over the 4
+//    condition latents and the main UNet, each batch 4 at 64x64;
+//  - refine (SD 1.5 + tile ControlNet + IP-Adapter): the 1024 px grid with guidance as one doubled
+//    batch, the ControlNet and the UNet each batch 2 at 128x128 latents (16,384 tokens in the first
+//    level's self-attention), the UNet's context 77 text + 4 image tokens.
 // Prints seconds per step (median of --repetitions, default 3), the resident memory before the first
 // step (the weights) and the peak RSS (of the whole process: run one step kind with --only to see its
 // own; GB here are GiB). A full run is 30 steps each for the first two, 10 for refine.
@@ -143,22 +143,20 @@ int main(int argc, char** argv) try {
       randomize_parameters(*m, 0.02);
       set_precision(*m, precision);
     }
-    torch::Tensor x = torch::randn({1, 4, 128, 128}), text = torch::randn({2, 77, 768});
+    torch::Tensor x = torch::randn({2, 4, 128, 128}), text = torch::randn({2, 77, 768});
     torch::Tensor context = adapter->context(text, torch::randn({2, 1024}));
-    torch::Tensor control = torch::rand({1, 3, 1024, 1024});
+    torch::Tensor control = torch::rand({2, 3, 1024, 1024});
     const double before = resident_gb();
     const double s = median_seconds(repetitions, [&] {
-      guided_prediction(5.0, [&](GuidanceHalf half) {
-        UNetExtras extras;
-        {
-          ControlNetOutput residuals = controlnet->forward(x, torch::tensor(500.0f), batch_half(text, half), control);
-          extras.down_block_additional_residuals = std::move(residuals.down_block_res_samples);
-          extras.mid_block_additional_residual = std::move(residuals.mid_block_res_sample);
-        }
-        return unet->forward(x, torch::tensor(500.0f), batch_half(context, half), extras);
-      });
+      UNetExtras extras;
+      {
+        ControlNetOutput residuals = controlnet->forward(x, torch::tensor(500.0f), text, control);
+        extras.down_block_additional_residuals = std::move(residuals.down_block_res_samples);
+        extras.mid_block_additional_residual = std::move(residuals.mid_block_res_sample);
+      }
+      unet->forward(x, torch::tensor(500.0f), context, extras);
     });
-    std::printf("refine step (ControlNet + UNet with IP-Adapter, two halves of batch 1 at 128x128) %s: %6.2f s   resident before %.2f GB, peak RSS %.2f GB\n",
+    std::printf("refine step (ControlNet + UNet with IP-Adapter, batch 2 at 128x128) %s: %6.2f s   resident before %.2f GB, peak RSS %.2f GB\n",
                 precision_name(precision), s, before, peak_rss_gb());
   }
   return 0;

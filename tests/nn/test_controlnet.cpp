@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include "golden.h"
-#include "nn/pipelines/guidance.h"
 
 namespace u3d::nn {
 namespace {
@@ -36,37 +35,6 @@ TEST(ControlNet, ResidualsAndUNetWithResidualsMatchDiffusers) {
   extras.mid_block_additional_residual = out.mid_block_res_sample;
   EXPECT_CLOSE_TO_GOLDEN(unet->forward(in["sample"], in["timestep"], in["encoder_hidden_states"], extras),
                          ref["unet_sample_out_with_residuals"], kForwardTolerance);
-}
-
-// The refinement runs its guidance halves one after the other (nn/pipelines/guidance.h): the case's
-// batch of two, run a sample at a time, still gives diffusers' batched output.
-TEST(ControlNet, HalvesRunInTurnMatchTheBatchedOutput) {
-  torch::NoGradGuard no_grad;
-  ControlNetModel controlnet(ControlNetConfig::from_json(golden_config("controlnet"), "controlnet/config.json"),
-                             torch::TensorOptions());
-  load_golden_weights(*controlnet, "controlnet");
-  UNet2DConditionModel unet(UNetConfig::from_json(golden_config("unet_base"), "unet_base/config.json"),
-                            torch::TensorOptions());
-  load_golden_weights(*unet, "unet_base");
-  auto in = golden_tensors("controlnet", "inputs");
-  auto ref = golden_tensors("controlnet", "outputs");
-  ASSERT_EQ(in["sample"].size(0), 2);
-  const torch::Tensor raw = guided_prediction(
-                                1.0,
-                                [&](GuidanceHalf half) {
-                                  ControlNetOutput out = controlnet->forward(
-                                      batch_half(in["sample"], half), in["timestep"],
-                                      batch_half(in["encoder_hidden_states"], half),
-                                      batch_half(in["controlnet_cond"], half), in["conditioning_scale"].item<double>());
-                                  UNetExtras extras;
-                                  extras.down_block_additional_residuals = out.down_block_res_samples;
-                                  extras.mid_block_additional_residual = out.mid_block_res_sample;
-                                  return unet->forward(batch_half(in["sample"], half), in["timestep"],
-                                                       batch_half(in["encoder_hidden_states"], half), extras);
-                                },
-                                /*keep_raw=*/true)
-                                .raw;
-  EXPECT_CLOSE_TO_GOLDEN(raw, ref["unet_sample_out_with_residuals"], kForwardTolerance);
 }
 
 TEST(ControlNet, RejectsControlImageOfWrongSize) {

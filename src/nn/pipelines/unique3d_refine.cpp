@@ -8,7 +8,6 @@
 #include "nn/checkpoint/config_json.h"
 #include "nn/checkpoint/diffusers_folder.h"
 #include "nn/checkpoint/state_dict_loader.h"
-#include "nn/pipelines/guidance.h"
 #include "nn/pipelines/image_diffusion.h"
 #include "nn/preprocess/pil_resize.h"
 #include "nn/schedulers/scheduler_config.h"
@@ -197,6 +196,8 @@ torch::Tensor RefineModel::run(const RefineConditioning& conditioning, const Ref
   ip_adapter->set_scale(s.ip_adapter_scale);
 
   const torch::Tensor unet_context = ip_adapter->context(prompt_embeds, conditioning.image_embeds);
+  const torch::Tensor control = guidance ? torch::cat({conditioning.control, conditioning.control}) : conditioning.control;
+
   // img2img start (diffusers' get_timesteps): the schedule for all steps, entered at step `start`.
   auto* sigma_scheduler = dynamic_cast<SigmaScheduler*>(scheduler.get());
   TORCH_CHECK(sigma_scheduler, "refine: the scheduler must be an Euler sampler");
@@ -211,25 +212,17 @@ torch::Tensor RefineModel::run(const RefineConditioning& conditioning, const Ref
 
   for (int i = start; i < s.steps; ++i) {
     record("latents." + std::to_string(i - start), latents);
-    const torch::Tensor input = scheduler->scale_model_input(latents, i);
+    const torch::Tensor input = scheduler->scale_model_input(guidance ? torch::cat({latents, latents}) : latents, i);
     const torch::Tensor t = scheduler->timestep(i);
-    // The ControlNet's residuals of one half are dropped before the next half runs.
-    auto predict = [&](const torch::Tensor& text, const torch::Tensor& context) {
-      UNetExtras extras;
-      {
-        ControlNetOutput residuals = controlnet->forward(input, t, text, conditioning.control, s.conditioning_scale);
-        extras.down_block_additional_residuals = std::move(residuals.down_block_res_samples);
-        extras.mid_block_additional_residual = std::move(residuals.mid_block_res_sample);
-      }
-      return unet->forward(input, t, context, extras);
-    };
-    const torch::Tensor prediction =
-        guidance ? guided_prediction(s.guidance_scale,
-                                     [&](GuidanceHalf half) {
-                                       return predict(batch_half(prompt_embeds, half), batch_half(unet_context, half));
-                                     })
-                       .combined
-                 : predict(prompt_embeds, unet_context);
+    const ControlNetOutput residuals = controlnet->forward(input, t, prompt_embeds, control, s.conditioning_scale);
+    UNetExtras extras;
+    extras.down_block_additional_residuals = residuals.down_block_res_samples;
+    extras.mid_block_additional_residual = residuals.mid_block_res_sample;
+    torch::Tensor prediction = unet->forward(input, t, unet_context, extras);
+    if (guidance) {
+      auto halves = prediction.chunk(2);
+      prediction = halves[0] + s.guidance_scale * (halves[1] - halves[0]);
+    }
     latents = scheduler->step(prediction, i, latents, noise).prev_sample;
     progress_step("denoise", i - start + 1, run_steps);
   }

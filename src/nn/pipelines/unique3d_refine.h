@@ -15,7 +15,6 @@
 //  - guidance 5.0 on both halves [negative, prompt]; the ControlNet (conditioning scale 1.0) sees the text
 //    embeddings only, the UNet the text embeddings followed by the 4 IP-Adapter tokens (scale 1.0) of
 //    the front image's CLIP ViT-H/14 embedding (the negative half: the tokens of a zero embedding);
-//    the halves run one after the other here (nn/pipelines/guidance.h), not as one doubled batch;
 //  - VAE decode, (x / 2 + 0.5) clamped to [0, 1].
 // Noise is drawn in diffusers' order: the VAE sample, the img2img noise, then one draw per step.
 //
