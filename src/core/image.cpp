@@ -37,7 +37,8 @@ bool is_dicom_signature(const unsigned char* bytes, size_t size) {
 Image load_image(const fs::path& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw Error("image not found: " + path.string());
-  if (fs::is_directory(path, ec)) throw Error("expected an image file, got a folder: " + path.string());
+  // A folder, and a device or pipe, which would block (/dev/stdin) or never end (/dev/zero).
+  if (!fs::is_regular_file(path, ec)) throw Error("expected an image file, got a folder or device: " + path.string());
   {
     unsigned char head[132] = {};
     std::ifstream in(path, std::ios::binary);

@@ -318,6 +318,18 @@ bool extension_supported(const std::string& name) {
   return name == "KHR_mesh_quantization" || name == "KHR_materials_unlit" || name == "KHR_materials_emissive_strength";
 }
 
+// tinygltf's file reader for the glTF and the files its URIs name (buffers, images), refusing anything
+// that is not a regular file: a folder, or a device or pipe, which would block (/dev/stdin) or read
+// until memory runs out (/dev/zero).
+bool read_regular_file(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* user) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) {
+    if (err) *err += path + " is a folder or device, not a file\n";
+    return false;
+  }
+  return tinygltf::ReadWholeFile(out, err, path, user);
+}
+
 }  // namespace
 
 Mesh read_gltf(const fs::path& path) {
@@ -326,6 +338,8 @@ Mesh read_gltf(const fs::path& path) {
   tinygltf::Model model;
   ImageLoading images{&model, {}};
   loader.SetImageLoader(&decode_gltf_image, &images);
+  loader.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &read_regular_file, &tinygltf::WriteWholeFile,
+                         nullptr});
   std::string err, warn;
   std::string ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });

@@ -44,8 +44,12 @@ std::string_view texture_file_name(std::string_view rest) {
 }  // namespace
 
 std::map<std::string, MtlEntry> read_mtl(const fs::path& path) {
+  std::error_code ec;
+  require(fs::exists(path, ec), "material library not found: " + path.string());
+  // A folder reads as empty; a device or pipe would block (/dev/stdin) or never end (/dev/zero).
+  require(fs::is_regular_file(path, ec), "material library " + path.string() + " is a folder or device, not a file");
   std::ifstream in(path, std::ios::binary);
-  require(in.good(), "material library not found: " + path.string());
+  require(in.good(), "cannot open material library " + path.string());
   std::map<std::string, MtlEntry> materials;
   MtlEntry* current = nullptr;
   std::string line;

@@ -88,6 +88,19 @@ TEST(Image, BadInputsGiveErrors) {
   EXPECT_THROW(save_image(Image(2, 2, 3), d / "no_such_dir" / "x.png"), Error);
 }
 
+// A device or pipe given as an image: /dev/stdin would block and /dev/zero never ends, so anything that
+// is not a regular file is refused before it is read.
+TEST(Image, DevicesAndFoldersAreRefusedBeforeReading) {
+  for (const fs::path& path : {fs::path("/dev/null"), temp_dir()}) {
+    try {
+      load_image(path);
+      ADD_FAILURE() << path << " accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("got a folder or device"), std::string::npos) << e.what();
+    }
+  }
+}
+
 // 128 bytes, "DICM", one more: OpenCV hands that to GDCM, whose assertion aborted the process (found by
 // fuzz_image). It must be an Error like any other file that is not an image.
 TEST(Image, DicomSignatureIsAnErrorNotAnAbort) {

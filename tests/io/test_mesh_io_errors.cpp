@@ -87,3 +87,21 @@ TEST(MeshIo, EmbeddedDicomBytesAreAnErrorNotAnAbort) {
     EXPECT_NE(std::string(e.what()).find("image 0: DICOM data"), std::string::npos) << e.what();
   }
 }
+
+// An OBJ's material library and a glTF's buffer or image URIs name other files; a name that is a folder
+// or a device is refused before it is read (a folder read as an empty library before, and /dev/zero
+// would have been read until memory ran out; found while fuzzing).
+TEST(MeshIo, CompanionFilesMustBeRegularFiles) {
+  fs::path dir = scratch_dir();
+  fs::create_directory(dir / "lib.mtl");
+  write_file(dir / "tri.obj", "mtllib lib.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n");
+  expect_error_containing([&] { read_mesh(dir / "tri.obj"); }, "lib.mtl is a folder or device, not a file");
+  fs::create_directory(dir / "tri.bin");
+  write_file(dir / "tri.gltf",
+             R"({"asset":{"version":"2.0"},"buffers":[{"byteLength":36,"uri":"tri.bin"}]})");
+  expect_error_containing([&] { read_mesh(dir / "tri.gltf"); }, "tri.bin is a folder or device, not a file");
+  fs::create_symlink("/dev/zero", dir / "zero.bin");
+  write_file(dir / "zero.gltf",
+             R"({"asset":{"version":"2.0"},"buffers":[{"byteLength":36,"uri":"zero.bin"}]})");
+  expect_error_containing([&] { read_mesh(dir / "zero.gltf"); }, "zero.bin is a folder or device, not a file");
+}
