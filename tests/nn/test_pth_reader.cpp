@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <functional>
 #include <string>
 #include <unistd.h>
 
@@ -126,6 +127,105 @@ TEST_F(PthTest, RefusesGlobalsOutsideTheWhitelist) {
     p.global(module, name).mark().str("echo hi").op('t').op('R');
     expect_error(write_pth("evil", p.finish(), {}), {"evil.pth", module + "." + name, "refuses"});
   }
+}
+
+// Loading never runs code from the file: every way a pickle can name a callable goes through the
+// whitelist or is not understood at all. Each pickle would run `touch ran` if anything ran it.
+TEST_F(PthTest, HostilePicklesAreRefusedAndRunNothing) {
+  const std::string command = "touch " + (dir_ / "ran").string();
+  auto raw = [](PickleWriter& p, const std::string& bytes) -> PickleWriter& {
+    for (char c : bytes) p.op(c);
+    return p;
+  };
+  PickleWriter stack_global;  // protocol 4's STACK_GLOBAL: module and name from the stack
+  stack_global.str("os").str("system").op('\x93').mark().str(command).op('t').op('R');
+  expect_error(write_pth("stack_global", stack_global.finish(), {}), {"stack_global.pth", "'os.system'", "refuses"});
+
+  PickleWriter getattr;  // the usual first step towards anything else
+  getattr.global("builtins", "getattr").mark().str("os").str("system").op('t').op('R');
+  expect_error(write_pth("getattr", getattr.finish(), {}), {"getattr.pth", "'builtins.getattr'", "refuses"});
+
+  PickleWriter nested;  // an allowed call whose argument is a call of a refused one
+  nested.global("collections", "OrderedDict").mark();
+  nested.global("posix", "system").mark().str(command).op('t').op('R').op('t').op('R');
+  expect_error(write_pth("nested", nested.finish(), {}), {"nested.pth", "'posix.system'", "refuses"});
+
+  PickleWriter not_callable;  // REDUCE on a value that is not a global
+  not_callable.str("os.system").mark().str(command).op('t').op('R');
+  expect_error(write_pth("not_callable", not_callable.finish(), {}), {"not_callable.pth", "REDUCE on a"});
+
+  PickleWriter inst;  // INST: import and call in one opcode
+  raw(inst.mark().str(command).op('i'), "os\nsystem\n");
+  expect_error(write_pth("inst", inst.finish(), {}), {"inst.pth", "opcode 0x69"});
+
+  PickleWriter newobj;  // NEWOBJ: cls.__new__(cls, *args) of an allowed class
+  newobj.global("collections", "OrderedDict").op(')').op('\x81');
+  expect_error(write_pth("newobj", newobj.finish(), {}), {"newobj.pth", "opcode 0x81"});
+
+  EXPECT_FALSE(fs::exists(dir_ / "ran"));
+}
+
+// Memo indices are 32-bit keys of a map: the largest is stored and read back without allocating
+// anything for the indices below it; an index never stored is an error.
+TEST_F(PthTest, HugeMemoIndices) {
+  const std::string biggest("\xff\xff\xff\xff", 4), unset("\xfe\xff\xff\xff", 4);
+  PickleWriter stored;
+  stored.empty_ordered_dict().op('r');  // LONG_BINPUT 2^32 - 1
+  for (char c : biggest) stored.op(c);
+  stored.op('0').op('j');  // POP, LONG_BINGET 2^32 - 1
+  for (char c : biggest) stored.op(c);
+  EXPECT_TRUE(load_pth(write_pth("memo", stored.finish(), {})).empty());
+
+  PickleWriter missing;
+  missing.op('j');
+  for (char c : unset) missing.op(c);
+  expect_error(write_pth("missing_memo", missing.finish(), {}), {"missing_memo.pth", "memo entry 4294967294"});
+}
+
+// The zip directory of a crafted archive: a record placed past the end of the file, and two records
+// pointing at the same bytes (overlapping); each is refused, naming the file.
+TEST_F(PthTest, ZipRecordsOutsideTheFileOrOverlappingAreRefused) {
+  const torch::Tensor a = torch::arange(16, torch::kFloat32), b = torch::arange(16, torch::kFloat32) * 2;
+  PickleWriter p;
+  p.empty_ordered_dict().mark();
+  p.str("a").tensor("FloatStorage", "0", 16, 0, {16}, {1});
+  p.str("b").tensor("FloatStorage", "1", 16, 0, {16}, {1}).op('u');
+  // The central-directory entry of data/<key>: its local header offset is at byte 42.
+  auto patch_offset = [&](const fs::path& path, const std::string& key, std::function<uint32_t(const std::string&)> offset) {
+    std::string bytes;
+    {
+      std::ifstream in(path, std::ios::binary);
+      bytes.assign((std::istreambuf_iterator<char>(in)), {});
+    }
+    auto entry_of = [&](const std::string& k) {
+      const std::string name = "/data/" + k;
+      for (size_t at = bytes.find("PK\x01\x02"); at != std::string::npos; at = bytes.find("PK\x01\x02", at + 4)) {
+        const size_t len = uint8_t(bytes[at + 28]) | (uint8_t(bytes[at + 29]) << 8);
+        const std::string entry_name = bytes.substr(at + 46, len);
+        if (entry_name.size() >= name.size() && entry_name.compare(entry_name.size() - name.size(), name.size(), name) == 0)
+          return at;
+      }
+      ADD_FAILURE() << "no directory entry for data/" << k;
+      return std::string::npos;
+    };
+    const size_t at = entry_of(key);
+    if (at == std::string::npos) return;
+    const uint32_t v = offset(bytes.substr(entry_of("0"), 46));
+    for (int i = 0; i < 4; ++i) bytes[at + 42 + i] = char((v >> (8 * i)) & 0xff);
+    std::ofstream(path, std::ios::binary | std::ios::trunc).write(bytes.data(), std::streamsize(bytes.size()));
+  };
+  const std::map<std::string, std::string> records{{"0", raw_bytes(a)}, {"1", raw_bytes(b)}};
+
+  const fs::path past = write_pth("past_end", p.finish(), records);
+  patch_offset(past, "1", [&](const std::string&) { return uint32_t(fs::file_size(past) + 1000); });
+  expect_error(past, {"past_end.pth", "corrupt"});
+
+  const fs::path overlap = write_pth("overlap", p.finish(), records);
+  patch_offset(overlap, "1", [](const std::string& entry0) {
+    return uint32_t(uint8_t(entry0[42]) | (uint8_t(entry0[43]) << 8) | (uint8_t(entry0[44]) << 16) |
+                    (uint32_t(uint8_t(entry0[45])) << 24));
+  });
+  expect_error(overlap, {"overlap.pth", "corrupt"});
 }
 
 TEST_F(PthTest, TruncatedArchiveNamesTheFile) {
