@@ -190,3 +190,23 @@ put("pickle", "state_dict_p2.pkl", dumps(state, 2))
 put("pickle", "state_dict_p4.pkl", dumps(state, 4))
 put("pickle", "values_p2.pkl", dumps({"ints": [0, 1, -1, 300, 70000, 2**40, -2**63], "f": 1.5, "s": "x" * 300,
                                       "t": (1, (2, (3,))), "b": [True, False, None]}, 2))
+
+
+# ---- zip directories of .pth checkpoints: torch.save's layout (an "archive/" folder, stored records),
+# once plain and once with zip64 fields in every record
+import io
+import zipfile
+
+
+def pth_zip(zip64):
+    out = io.BytesIO()
+    with zipfile.ZipFile(out, "w", compression=zipfile.ZIP_STORED) as z:
+        for name, data in [("archive/data.pkl", dumps(state, 2)), ("archive/data/0", bytes(range(64))),
+                           ("archive/version", b"3\n")]:
+            with z.open(zipfile.ZipInfo(name), "w", force_zip64=zip64) as f:
+                f.write(data)
+    return out.getvalue()
+
+
+put("zip", "pth.zip", pth_zip(False))
+put("zip", "pth_zip64.zip", pth_zip(True))

@@ -6,14 +6,14 @@
 # Exits non-zero when any target finds a crash, sanitizer report, leak, timeout or out-of-memory; the
 # input that caused it is left in build-fuzz/artifacts/<target>/. Prints executions per second and
 # coverage per target at the end.
-#   scripts/fuzz.sh [SECONDS] [TARGET...]     targets: image obj mtl ply gltf config pickle
+#   scripts/fuzz.sh [SECONDS] [TARGET...]     targets: image obj mtl ply gltf config pickle zip
 # Environment: FUZZ_JOBS (build jobs, default all cores).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
 seconds="${1:-30}"
 [ $# -gt 0 ] && shift
-all_targets=(image obj mtl ply gltf config pickle)
+all_targets=(image obj mtl ply gltf config pickle zip)
 targets=("$@")
 [ ${#targets[@]} -eq 0 ] && targets=("${all_targets[@]}")
 
@@ -61,12 +61,13 @@ seeds_from ply
 seeds_from gltf
 seeds_from config tests/data/nn/*/config.json tests/data/nn/*/*_config*.json tests/data/nn/scheduler/tolerances.json
 seeds_from pickle
+seeds_from zip tests/data/nn/unet_mv/weights.pth
 # The pickle of a real torch.save checkpoint, taken out of its zip.
 python3 -c "import sys, zipfile; z = zipfile.ZipFile(sys.argv[1]); open(sys.argv[2], 'wb').write(z.read('weights/data.pkl'))" \
   tests/data/nn/unet_mv/weights.pth "$build/seeds/pickle/unet_mv_data.pkl"
 
 # Longest input each target tries: large enough for the fixtures that matter, small enough to stay fast.
-declare -A max_len=([image]=131072 [obj]=65536 [mtl]=4096 [ply]=16384 [gltf]=16384 [config]=16384 [pickle]=65536)
+declare -A max_len=([image]=131072 [obj]=65536 [mtl]=4096 [ply]=16384 [gltf]=16384 [config]=16384 [pickle]=65536 [zip]=65536)
 
 failed=()
 summary=()
