@@ -7,7 +7,8 @@
 # input that caused it is left in build-fuzz/artifacts/<target>/. Prints executions per second and
 # coverage per target at the end.
 #   scripts/fuzz.sh [SECONDS] [TARGET...]     targets: image obj mtl ply gltf config pickle zip
-# Environment: FUZZ_JOBS (build jobs, default all cores).
+# Environment: FUZZ_JOBS (build jobs, default all cores); FUZZ_SEED (libFuzzer's -seed, so that a run from
+# the same corpus repeats; scripts/test.sh sets it).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
@@ -79,9 +80,11 @@ for t in "${targets[@]}"; do
   echo "[fuzz] $t: ${seconds}s"
   dict=()
   [ -f "fuzz/dict/$t.dict" ] && dict=(-dict="fuzz/dict/$t.dict")
+  seed=()
+  [ -n "${FUZZ_SEED:-}" ] && seed=(-seed="$FUZZ_SEED")
   rc=0
   "$build/fuzz/fuzz_$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len="${max_len[$t]}" \
-    "${dict[@]}" -print_final_stats=1 -artifact_prefix="$artifacts/" "$corpus" "fuzz/corpus/$t" "$build/seeds/$t" \
+    "${dict[@]}" "${seed[@]}" -print_final_stats=1 -artifact_prefix="$artifacts/" "$corpus" "fuzz/corpus/$t" "$build/seeds/$t" \
     </dev/null >"$log" 2>&1 || rc=$?
   # libFuzzer's last status line: "#N DONE cov: C ft: F corp: ..."; its stats: execs and exec/s.
   status=$(grep -E '^#[0-9]+[[:space:]]+(DONE|pulse|NEW|REDUCE|INITED)' "$log" | tail -1 || true)
