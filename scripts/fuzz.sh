@@ -18,10 +18,11 @@ all_targets=(image obj mtl ply gltf config pickle zip)
 targets=("$@")
 [ ${#targets[@]} -eq 0 ] && targets=("${all_targets[@]}")
 
-# Dependencies: the project's own, then clang with its sanitizer/libFuzzer runtimes and OpenMP.
+# Dependencies: the project's own, then clang with its sanitizer/libFuzzer runtimes and OpenMP, and python3
+# (it takes the pickle seed out of a checkpoint).
 bash scripts/install_deps.sh
 missing=()
-for p in clang libclang-rt-14-dev libomp-dev; do
+for p in clang libclang-rt-14-dev libomp-dev python3; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
 if [ ${#missing[@]} -gt 0 ]; then
