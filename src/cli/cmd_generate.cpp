@@ -73,8 +73,8 @@ const CommandRegistration registration{
       auto a = std::make_shared<GenerateArgs>();
       GenerateRequest& r = a->request;
       sub.add_option("image", r.image,
-                     "The photo (PNG or JPEG); best with the object on a transparent background, facing the camera")
-          ->required();
+                     "The photo (PNG or JPEG); best with the object on a transparent background, facing the camera. "
+                     "Not needed with --from-intermediates, whose front.png is the photo");
       sub.add_option("-o,--output", r.output, "Output mesh (.glb, .obj or .ply)")->required();
       add_network_options(sub, a->network);
       sub.add_flag("--no-refine", a->no_refine,

@@ -254,6 +254,13 @@ GenerateSummary generate(const GenerateRequest& request, ProgressListener* liste
             "intermediates folder " + request.from_intermediates.string() +
                 " holds no run to resume: it needs front.png and the outputs of a later stage (multiview/, refined/, "
                 "upscaled/ or views/)");
+    std::string done;
+    for (int s = kPrepare; s < start; ++s) done += (s == kPrepare ? "" : s + 1 == start ? " and " : ", ") + generate_stage_names()[s];
+    progress("resuming from " + request.from_intermediates.string() + ", where " + done +
+             (start == kPrepare + 1 ? " is" : " are") + " done" +
+             (request.image.empty() ? "" : "; its front.png is the photo (" + request.image.string() + " is not read)"));
+  } else {
+    require(!request.image.empty(), "no photo given (or resume a run with --from-intermediates)");
   }
   if (!request.keep_intermediates.empty()) ensure_directory(request.keep_intermediates);
 

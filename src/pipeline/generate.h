@@ -27,7 +27,8 @@
 namespace u3d {
 
 struct GenerateRequest {
-  std::filesystem::path image;   // the photo (PNG/JPEG; RGBA with the object on transparency, or not)
+  std::filesystem::path image;   // the photo (PNG/JPEG; RGBA with the object on transparency, or not); not
+                                 // read, and may be empty, when resuming from_intermediates
   std::filesystem::path output;  // .glb, .obj or .ply
   NetworkOptions network;
   bool refine = true;                        // false: the views are resized instead of refined

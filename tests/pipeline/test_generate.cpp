@@ -63,19 +63,48 @@ TEST_F(Generate, WritesTheMeshAndEveryStagesIntermediatesAndResumesFromThem) {
     EXPECT_TRUE(fs::exists(*dir / "kept" / folder / "left_rgb.png")) << folder;
   EXPECT_TRUE(fs::exists(*dir / "kept" / "views" / "left_normal.png"));
 
-  // Resume after each stage: remove the later stages' outputs, and only the stages after run.
+  // Resume after each stage: remove the later stages' outputs, and only the stages after run. The run
+  // says where it resumes; the photo is the folder's front.png, so none need be given.
+  struct Messages : ProgressListener {
+    std::vector<std::string> seen;
+    void on_event(const ProgressEvent& e) override {
+      if (e.kind == ProgressEvent::Kind::Message) seen.push_back(e.text);
+    }
+  };
   const std::vector<std::string> later = {"views", "upscaled", "refined", "multiview"};
+  const std::vector<std::string> done = {"prepare, multiview, refine and upscale are done",
+                                         "prepare, multiview and refine are done", "prepare and multiview are done",
+                                         "prepare is done"};
   for (size_t removed = 0; removed < later.size(); ++removed) {
     fs::remove_all(*dir / "kept" / later[removed]);
     GenerateRequest resume = request("resumed.glb");
     resume.from_intermediates = *dir / "kept";
-    const GenerateSummary rs = generate(resume);
+    if (removed % 2 == 0) resume.image.clear();
+    Messages messages;
+    const GenerateSummary rs = generate(resume, &messages);
+    ASSERT_FALSE(messages.seen.empty());
+    EXPECT_NE(messages.seen.front().find("resuming from " + (*dir / "kept").string() + ", where " + done[removed]),
+              std::string::npos)
+        << messages.seen.front();
+    EXPECT_EQ(messages.seen.front().find("is not read") != std::string::npos, removed % 2 == 1) << messages.seen.front();
     EXPECT_TRUE(fs::exists(*dir / "resumed.glb"));
     size_t resumed = 0;
     for (const auto& stage : rs.stages) resumed += stage.resumed;
     EXPECT_GE(resumed, 1u);
     fs::remove(*dir / "resumed.glb");
   }
+}
+
+TEST_F(Generate, NeedsAPhotoUnlessItResumes) {
+  GenerateRequest r = request("no_photo.glb");
+  r.image.clear();
+  try {
+    generate(r);
+    ADD_FAILURE() << "ran without a photo";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no photo given"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(*dir / "no_photo.glb"));
 }
 
 TEST_F(Generate, Takes16BitPhotos) {
