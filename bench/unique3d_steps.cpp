@@ -148,12 +148,10 @@ int main(int argc, char** argv) try {
     torch::Tensor control = torch::rand({2, 3, 1024, 1024});
     const double before = resident_gb();
     const double s = median_seconds(repetitions, [&] {
+      ControlNetOutput residuals = controlnet->forward(x, torch::tensor(500.0f), text, control);
       UNetExtras extras;
-      {
-        ControlNetOutput residuals = controlnet->forward(x, torch::tensor(500.0f), text, control);
-        extras.down_block_additional_residuals = std::move(residuals.down_block_res_samples);
-        extras.mid_block_additional_residual = std::move(residuals.mid_block_res_sample);
-      }
+      extras.down_block_additional_residuals = residuals.down_block_res_samples;
+      extras.mid_block_additional_residual = residuals.mid_block_res_sample;
       unet->forward(x, torch::tensor(500.0f), context, extras);
     });
     std::printf("refine step (ControlNet + UNet with IP-Adapter, batch 2 at 128x128) %s: %6.2f s   resident before %.2f GB, peak RSS %.2f GB\n",

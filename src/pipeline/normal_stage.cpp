@@ -25,10 +25,15 @@ torch::Tensor model_input(const Image& view, int size) {
   return nn::pil_resize(rgb, size, size, nn::PilFilter::Lanczos);
 }
 
+// A map in [0, 1] as the 8-bit image the official code works on.
+torch::Tensor to_bytes(const torch::Tensor& unit) {
+  return unit.mul(255).round().clamp(0, 255).to(torch::kUInt8).contiguous();
+}
+
 // A camera-space normal map of view v (float [H, W, 3] in [0, 1]) -> RGBA world-space map, the background
 // keyed out by the colour of pixel (0, 0) as remove_color does, on the 8-bit image the official code keys.
 Image key_and_rotate(const torch::Tensor& map, View v) {
-  const torch::Tensor u8 = map.mul(255).round().clamp(0, 255).to(torch::kUInt8).contiguous();
+  const torch::Tensor u8 = to_bytes(map);
   const int h = int(u8.size(0)), w = int(u8.size(1));
   const uint8_t* px = u8.data_ptr<uint8_t>();
   // World normal = R_y(90 deg * i) n_cam (docs/conventions.md, "Normal maps").
@@ -116,7 +121,7 @@ ViewSetImages run_normal_stage(const std::array<Image, 4>& views, const NetworkO
     summary.timings.push_back({"load upscaler", load_upscaler.finish()});
     StageTimer upscale_timer("upscaling the normal maps x4");
     std::vector<torch::Tensor> bytes;
-    for (const torch::Tensor& map : normal_maps) bytes.push_back(map.mul(255).round().clamp(0, 255).to(torch::kUInt8).contiguous());
+    for (const torch::Tensor& map : normal_maps) bytes.push_back(to_bytes(map));
     std::vector<torch::Tensor> upscaled = upscaler->upscale(bytes);
     for (size_t i = 0; i < normal_maps.size(); ++i) normal_maps[i] = upscaled[i].to(torch::kFloat).div(255);
     summary.timings.push_back({"upscale normals", upscale_timer.finish()});
