@@ -1,58 +1,104 @@
 #include "isomer/silhouette_fit.h"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
 
 #include "core/error.h"
 #include "core/progress.h"
-#include "geometry/column_occupancy.h"
+#include "geometry/mesh_topology.h"
 #include "geometry/quadric_decimation.h"
 #include "isomer/silhouette_check.h"
 #include "isomer/visual_hull.h"
+#include "render/rasterizer.h"
 
 namespace u3d {
 namespace {
 
-// A column counts as explained by the mesh when at least this many of its samples are inside both.
+// A column counts as explained by the carved hull when at least this many of its samples are inside.
 // One sample is a sliver: its surface covers a fraction of the column's pixel, and a plate 2 % of the
 // object thick spans 3.5 samples at 192^3.
 constexpr int kMinCoverSamples = 2;
-// A column whose samples inside both are at least this share of the hull's samples in it is taken as
-// the hull's: the mesh and the hull agree there but for a dent or a thinned plate, which the fit is
-// called to repair (it runs only on meshes that already disagree with the masks). On shelf's
-// optimised mesh: CD-L1 0.00192 (never), 0.00117 (0.5), 0.00094 (0.3), 0.00092 (0.1); hull 0.00072.
-constexpr float kHullColumnShare = 0.3f;
+
+// What a view shows of the mesh: the depth of its nearest surface at every pixel, and the pixels of
+// the mask it leaves uncovered (a part the mesh lacks).
+struct DepthView {
+  Camera camera;
+  RasterBuffer raster;
+  const Image* mask = nullptr;
+
+  // The pixel `world` projects to, or -1 outside the image; `depth` its depth along the view.
+  int64_t pixel_of(const Vec3f& world, float& depth) const {
+    const Vec3f p = camera.to_pixel(world);
+    depth = p.z();
+    const int x = int(std::floor(p.x())), y = int(std::floor(p.y()));
+    if (x < 0 || y < 0 || x >= raster.width || y >= raster.height) return -1;
+    return int64_t(y) * raster.width + x;
+  }
+  bool unexplained(int64_t pixel) const {
+    return pixel >= 0 && !raster.covered(size_t(pixel)) && is_foreground(mask->data[size_t(pixel) * 4 + 3]);
+  }
+  // How far a point of depth `depth` lies behind the surface seen through `pixel` (negative in front
+  // of it; +inf where the pixel sees no surface).
+  float behind(int64_t pixel, float depth) const {
+    if (pixel < 0 || !raster.covered(size_t(pixel))) return std::numeric_limits<float>::infinity();
+    return depth - raster.depth[size_t(pixel)];
+  }
+};
 
 }  // namespace
 
 ScalarGrid silhouette_fit_field(const Mesh& mesh, const ViewSet& views, int resolution) {
   const ScalarGrid hull = visual_hull_field(views, resolution, HullMasks::Normals);
-  ScalarGrid field = column_occupancy_field(mesh.positions, mesh.faces, hull);
-  const int n = hull.nx;  // the grid is a cube
-  // Per column: does the hull reach into it, and how many samples of the hull and of hull AND mesh
-  // does it hold? A column is taken from the hull when the mesh misses it or nearly fills it.
-  std::vector<uint8_t> open_z(size_t(n) * n, 0), open_x(size_t(n) * n, 0);  // indexed x + n y, y + n z
-  std::vector<uint8_t> reach_z(open_z.size(), 0), reach_x(open_x.size(), 0);
-  std::vector<int> cover_z(open_z.size(), 0), cover_x(open_x.size(), 0);
-  std::vector<int> hull_z(open_z.size(), 0), hull_x(open_x.size(), 0);
+  std::vector<DepthView> depths;
+  for (View v : kAllViews) {
+    const Camera camera = view_camera(v, views[v].normals.width);
+    depths.push_back({camera, rasterize(mesh, camera), &views[v].normals});
+  }
+  const float to_field = 0.5f / hull.spacing;  // world lengths in the hull's units (0.5 per voxel)
+  const int n = hull.nx;                       // the grid is a cube
+  ScalarGrid field = hull;
+#pragma omp parallel for schedule(dynamic)
+  for (int z = 0; z < n; ++z)
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x) {
+        const size_t i = hull.index(x, y, z);
+        if (hull.values[i] <= 0.f) continue;  // outside a mask: the hull's value places the surface
+        const Vec3f p = hull.position(x, y, z);
+        std::array<int64_t, 4> pixels;
+        std::array<float, 4> sample_depths;
+        bool keep = false;  // on the ray of a mask pixel the mesh leaves uncovered: no view carves it
+        for (size_t v = 0; v < depths.size(); ++v) {
+          pixels[v] = depths[v].pixel_of(p, sample_depths[v]);
+          keep = keep || depths[v].unexplained(pixels[v]);
+        }
+        if (keep) continue;
+        float value = hull.values[i];
+        for (size_t v = 0; v < depths.size(); ++v)
+          value = std::min(value, depths[v].behind(pixels[v], sample_depths[v]) * to_field);
+        field.values[i] = std::max(value, -1.f);
+      }
+  // Per column: does the hull reach into it, and does the carved field hold at least two samples of
+  // it? A column the carving emptied (the mesh misses part of a mask there) is taken from the hull.
+  std::vector<uint8_t> reach_z(size_t(n) * n, 0), reach_x(reach_z.size(), 0);  // indexed x + n y, y + n z
+  std::vector<int> cover_z(reach_z.size(), 0), cover_x(reach_x.size(), 0);
   for (int z = 0; z < n; ++z)
     for (int y = 0; y < n; ++y)
       for (int x = 0; x < n; ++x) {
         const size_t i = hull.index(x, y, z);
         if (hull.values[i] <= 0.f) continue;
         reach_z[size_t(x) + size_t(n) * y] = reach_x[size_t(y) + size_t(n) * z] = 1;
-        ++hull_z[size_t(x) + size_t(n) * y], ++hull_x[size_t(y) + size_t(n) * z];
         if (field.values[i] > 0.f) ++cover_z[size_t(x) + size_t(n) * y], ++cover_x[size_t(y) + size_t(n) * z];
       }
-  for (size_t c = 0; c < open_z.size(); ++c) {
-    open_z[c] = reach_z[c] && (cover_z[c] < kMinCoverSamples || cover_z[c] >= kHullColumnShare * hull_z[c]);
-    open_x[c] = reach_x[c] && (cover_x[c] < kMinCoverSamples || cover_x[c] >= kHullColumnShare * hull_x[c]);
-  }
   for (int z = 0; z < n; ++z)
     for (int y = 0; y < n; ++y)
       for (int x = 0; x < n; ++x) {
-        const size_t i = hull.index(x, y, z);
-        const bool from_hull = open_z[size_t(x) + size_t(n) * y] || open_x[size_t(y) + size_t(n) * z];
-        field.values[i] = std::min(hull.values[i], from_hull ? hull.values[i] : field.values[i]);
+        const size_t cz = size_t(x) + size_t(n) * y, cx = size_t(y) + size_t(n) * z;
+        if ((reach_z[cz] && cover_z[cz] < kMinCoverSamples) || (reach_x[cx] && cover_x[cx] < kMinCoverSamples)) {
+          const size_t i = hull.index(x, y, z);
+          field.values[i] = hull.values[i];
+        }
       }
   return field;
 }
@@ -60,6 +106,45 @@ ScalarGrid silhouette_fit_field(const Mesh& mesh, const ViewSet& views, int reso
 float min_silhouette_iou(const Mesh& mesh, const ViewSet& views) {
   const std::array<float, 4> iou = silhouette_iou(mesh, views);
   return *std::min_element(iou.begin(), iou.end());
+}
+
+std::optional<float> carved_hull_fill(const Mesh& mesh, const ViewSet& views, int resolution) {
+  const MeshTopology topo = mesh_topology(mesh);
+  if (!topo.watertight) return std::nullopt;
+  const ScalarGrid field = silhouette_fit_field(mesh, views, resolution);
+  // Each sample's share of its voxel from its value (0.5 per voxel from the surface): exact for a
+  // plane, where counting the samples inside would be up to half a voxel off on every face.
+  double inside = 0.0;
+  for (float v : field.values) inside += std::clamp(0.5 + 2.0 * double(v), 0.0, 1.0);
+  if (inside <= 0.0) return std::nullopt;
+  return float(topo.volume / (inside * std::pow(double(field.spacing), 3)));
+}
+
+float normal_map_error(const Mesh& mesh, const ViewSet& views) {
+  const std::vector<Vec3f> normals = face_normals(mesh.positions, mesh.faces);
+  double sum = 0.0;
+  size_t count = 0;
+  for (View v : kAllViews) {
+    const Image& map = views[v].normals;  // decoded: xyz in [-1, 1], alpha = mask
+    const RasterBuffer raster = rasterize(mesh, view_camera(v, map.width));
+    for (size_t p = 0; p < raster.pixel_count(); ++p) {
+      if (!raster.covered(p) || !is_foreground(map.data[p * 4 + 3])) continue;
+      const Vec3f n(map.data[p * 4], map.data[p * 4 + 1], map.data[p * 4 + 2]);
+      const float length = n.norm();
+      if (length < 1e-3f) continue;
+      const float cosine = std::clamp(normals[size_t(raster.face_id[p])].dot(n) / length, -1.f, 1.f);
+      sum += double(std::acos(cosine)) * (180.0 / M_PI);
+      ++count;
+    }
+  }
+  return count ? float(sum / double(count)) : 180.f;
+}
+
+Mesh silhouette_hull(const ViewSet& views, int resolution, size_t target_faces) {
+  StageTimer timer("silhouette fit: the masks' hull at " + std::to_string(resolution) + "^3");
+  Mesh surface = extract_zero_surface(visual_hull_field(views, resolution, HullMasks::Normals));
+  require(!surface.faces.empty(), "silhouette fit: the four masks share no volume");
+  return surface.face_count() <= target_faces ? surface : decimate_closed_mesh(surface, target_faces);
 }
 
 Mesh fit_to_silhouettes(const Mesh& mesh, const ViewSet& views, int resolution, size_t target_faces) {

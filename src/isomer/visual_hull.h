@@ -3,12 +3,13 @@
 // a baseline that uses the masks only (no normals). docs/evaluation.md compares it with ISOMER.
 //
 // Carving. A grid of resolution^3 voxels spans the views' orthographic box [-1, 1]^3. At each voxel
-// centre the field is
-//     min over the four views of (alpha at the centre's projection - 0.5),
-// alpha read bilinearly from the view's RGB alpha channel with its own camera (view_camera), so the
-// centre is kept exactly when it projects inside every mask (alpha > 0.5) and the field also says
-// how far inside, to sub-voxel precision. One layer of outside samples surrounds the grid, so an
-// object touching the box still gives a closed surface.
+// centre the field is the minimum over the four views of the mask's signed distance to its outline
+// (positive inside, pixels next to the outline placed within their pixel by alpha - 0.5), read
+// bilinearly at the centre's projection through the view's own camera (view_camera), in units of
+// 0.5 per voxel and clamped to +-1. So a centre is kept exactly when it projects inside every mask,
+// and the surface crosses between two samples where the mask's edge is even when a voxel spans
+// several pixels (alpha itself, flat a pixel away from the edge, put it halfway). One layer of outside
+// samples surrounds the grid, so an object touching the box still gives a closed surface.
 //
 // Surface. The zero level set of the field (marching_tetrahedra.h): closed, manifold, outward
 // normals. It has about a million faces at resolution 256; quadric decimation (quadric_decimation.h)

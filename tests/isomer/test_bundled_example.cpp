@@ -39,7 +39,7 @@ TEST(BundledExample, SpotReconstructsClosedTexturedAndOnTheSilhouettes) {
               mesh.face_count(), topo.summary().c_str(), iou[0], iou[1], iou[2], iou[3]);
   for (const StageTiming& t : result.timings) std::printf("spot stage %s: %.2f s\n", t.name.c_str(), t.seconds);
   for (float v : iou) EXPECT_GE(v, 0.9f);
-  const std::vector<std::string> stages = {"initial mesh", "coarse", "refine", "silhouette fit", "smooth and subdivide",
+  const std::vector<std::string> stages = {"initial mesh", "coarse", "refine", "smooth and subdivide", "silhouette fit",
                                            "decimate", "texture"};
   ASSERT_EQ(result.timings.size(), stages.size());
   for (size_t i = 0; i < stages.size(); ++i) EXPECT_EQ(result.timings[i].name, stages[i]);

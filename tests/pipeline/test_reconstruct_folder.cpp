@@ -53,8 +53,8 @@ TEST(ReconstructFolder, ReportsStagesAndStepsToItsListener) {
   }
   std::vector<std::string> names;
   for (const StageTiming& t : summary.timings) names.push_back(t.name);
-  EXPECT_EQ(names, (std::vector<std::string>{"load", "initial mesh", "coarse", "refine", "silhouette fit",
-                                             "smooth and subdivide", "decimate", "texture", "write", "previews"}));
+  EXPECT_EQ(names, (std::vector<std::string>{"load", "initial mesh", "coarse", "refine", "smooth and subdivide",
+                                             "silhouette fit", "decimate", "texture", "write", "previews"}));
   ASSERT_EQ(summary.written.size(), 3u);
   for (const auto& p : summary.written) EXPECT_TRUE(std::filesystem::exists(p)) << p;
   EXPECT_TRUE(summary.topology.closed_manifold());
