@@ -1,7 +1,5 @@
 #include "isomer/reconstruct.h"
 
-#include <cmath>
-#include <cstdio>
 #include <map>
 #include <optional>
 
@@ -68,22 +66,7 @@ ReconstructResult reconstruct(const ViewSet& views, const ReconstructOptions& op
   const SilhouetteFitOptions& fit = options.silhouette_fit;
   if (fit.enabled && (options.run_coarse || options.run_refine))
     timed("silhouette fit", [&] {
-      const float iou = min_silhouette_iou(smoothed, views);
-      const std::optional<float> fill = carved_hull_fill(mesh, views, fit.check_resolution);
-      char line[160];
-      std::snprintf(line, sizeof line, "silhouette fit: smallest silhouette IoU %.3f, volume %s of the carved hull",
-                    iou, fill ? (std::to_string(int(std::lround(100.f * *fill))) + " %").c_str() : "unknown (open mesh)");
-      progress(line);
-      if (iou >= fit.final_min_iou && (!fill || *fill >= fit.min_fill)) return;
-      // The fitted mesh keeps what the mesh shows; where the optimisation lost most of a thin part it
-      // can keep too little, and the masks' own hull explains the normal maps better.
-      Mesh fitted_mesh = fit_to_silhouettes(mesh, views, fit.final_resolution, size_t(fit.final_faces));
-      Mesh hull = silhouette_hull(views, fit.final_resolution, size_t(fit.final_faces));
-      const float fitted_error = normal_map_error(fitted_mesh, views), hull_error = normal_map_error(hull, views);
-      std::snprintf(line, sizeof line, "silhouette fit: normal error %.2f deg fitted, %.2f deg the masks' hull",
-                    fitted_error, hull_error);
-      progress(line);
-      smoothed = std::move(hull_error < fitted_error ? hull : fitted_mesh);
+      if (std::optional<Mesh> fitted_mesh = fit_optimised_mesh(mesh, smoothed, views, fit)) smoothed = std::move(*fitted_mesh);
     });
   mesh = std::move(smoothed);
   const size_t faces = final_face_count(options);

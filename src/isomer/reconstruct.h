@@ -6,10 +6,10 @@
 //   2. coarse optimisation     (coarse_stage.h: fit normals and masks at 512 px)
 //   3. refinement              (refine_stage.h: view or ExplicitTarget normals, at up to 512 px)
 //   4. smooth and subdivide    (surface_cleanup.h)
-//   4b. silhouette fit         (silhouette_fit.h: only when the smoothed mesh leaves a mask or the
-//                               optimised mesh has lost volume the views do not show missing; then the
-//                               optimised mesh is fitted, or the masks' hull taken where it explains
-//                               the normal maps better, and neither is smoothed)
+//   4b. silhouette fit         (silhouette_fit.h, fit_optimised_mesh: only when the smoothed mesh
+//                               leaves a mask or the optimised mesh has lost volume the views do not
+//                               show missing; then the fitted optimised mesh or the masks' hull, not
+//                               smoothed)
 //   5. decimation to a face count (geometry/quadric_decimation.h; only when asked, or for textures)
 //   6. colouring               (explicit_target.h: ExplicitTarget + completion, per vertex), or
 //      texture baking          (texture_bake.h: UV atlas, the same colouring per texel)

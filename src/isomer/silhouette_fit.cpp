@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "core/error.h"
@@ -161,6 +162,29 @@ Mesh fit_to_silhouettes(const Mesh& mesh, const ViewSet& views, int resolution, 
   if (surface.face_count() <= target_faces) return surface;
   StageTimer decimate_timer("silhouette fit: decimating " + std::to_string(surface.face_count()) + " faces");
   return decimate_closed_mesh(surface, target_faces);
+}
+
+std::optional<Mesh> fit_optimised_mesh(const Mesh& optimised, const Mesh& smoothed, const ViewSet& views,
+                                       const SilhouetteFitOptions& options) {
+  const float iou = min_silhouette_iou(smoothed, views);
+  const std::optional<float> fill = carved_hull_fill(optimised, views, options.check_resolution);
+  char line[160];
+  std::snprintf(line, sizeof line, "silhouette fit: smallest silhouette IoU %.3f, volume %s of the carved hull", iou,
+                fill ? (std::to_string(int(std::lround(100.f * *fill))) + " %").c_str() : "unknown (open mesh)");
+  progress(line);
+  if (iou >= options.final_min_iou && (!fill || *fill >= options.min_fill)) return std::nullopt;
+  const size_t faces = size_t(options.final_faces);
+  Mesh hull = silhouette_hull(views, options.final_resolution, faces);
+  if (fill && *fill < options.hull_below_fill) {
+    progress("silhouette fit: the masks' hull (the mesh lost most of its volume)");
+    return hull;
+  }
+  Mesh fitted = fit_to_silhouettes(optimised, views, options.final_resolution, faces);
+  const float fitted_error = normal_map_error(fitted, views), hull_error = normal_map_error(hull, views);
+  std::snprintf(line, sizeof line, "silhouette fit: normal error %.2f deg fitted, %.2f deg the masks' hull",
+                fitted_error, hull_error);
+  progress(line);
+  return hull_error < fitted_error ? std::move(hull) : std::move(fitted);
 }
 
 }  // namespace u3d

@@ -48,6 +48,10 @@ struct SilhouetteFitOptions {
   // measured on a grid of check_resolution.
   float min_fill = 0.8f;
   int check_resolution = 128;
+  // Below this share the optimised mesh has lost most of its volume (a sagged or perforated plate:
+  // table 19-22 %, shelf 14-16 % at 512 and 2048 px; box_chair 55-64 %, signpost 71-74 %), its depth
+  // is no account of the object, and the masks' hull is taken without fitting.
+  float hull_below_fill = 0.5f;
 };
 
 // The combined field on the visual hull's grid layout (visual_hull_field), positive inside.
@@ -67,6 +71,14 @@ float normal_map_error(const Mesh& mesh, const ViewSet& views);
 
 // The visual hull of the normal maps' masks on a grid of `resolution`, decimated to `target_faces`.
 Mesh silhouette_hull(const ViewSet& views, int resolution, size_t target_faces);
+
+// The final check and fit of an optimised mesh (reconstruct.h, stage 4b); `smoothed` is the mesh as it
+// would be output. Empty when the smoothed mesh keeps every mask (IoU >= final_min_iou) and the
+// optimised mesh holds at least min_fill of the carved hull's volume. Otherwise the masks' hull when the
+// mesh holds less than hull_below_fill, else the fitted optimised mesh or the hull, whichever explains
+// the normal maps better (normal_map_error). Reports its measures as progress messages.
+std::optional<Mesh> fit_optimised_mesh(const Mesh& optimised, const Mesh& smoothed, const ViewSet& views,
+                                       const SilhouetteFitOptions& options);
 
 // The fitted mesh on a grid of `resolution` voxels per axis, with at most `target_faces` faces
 // (closed, manifold, outward). Throws Error if the masks share no volume.

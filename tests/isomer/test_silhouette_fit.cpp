@@ -171,6 +171,28 @@ TEST(SilhouetteFit, HoleNoViewSeesIsClosed) {
   EXPECT_NEAR(topo.volume / plate, 1.0, 0.03);
 }
 
+// The final check: a mesh that keeps its masks and its volume is left alone; the perforated table top
+// above (a third of the plate's volume) gets the masks' hull, closed and solid.
+TEST(SilhouetteFit, OptimisedMeshIsFittedOnlyWhenItLosesAMaskOrItsVolume) {
+  const SilhouetteFitOptions options;
+  const Vec3f lo(-0.59375f, -0.046875f, -0.5f), hi(0.59375f, 0.046875f, 0.5f);
+  const ViewSet views = boxes_views({{lo, hi}}, 256);
+  const Mesh plate = box_mesh(lo, hi);
+  EXPECT_FALSE(fit_optimised_mesh(plate, plate, views, options).has_value());
+
+  const float a = hi.x(), t = hi.y();
+  const Mesh perforated = union_of({{{-a, -t, 0.4f}, {a, t, 0.5f}},
+                                    {{-a, -t, -0.5f}, {a, t, -0.4f}},
+                                    {{-a, -t, -0.4f}, {-a + 0.1f, t, 0.4f}},
+                                    {{a - 0.1f, -t, -0.4f}, {a, t, 0.4f}}});
+  const std::optional<Mesh> fitted = fit_optimised_mesh(perforated, perforated, views, options);
+  ASSERT_TRUE(fitted.has_value());
+  const MeshTopology topo = mesh_topology(*fitted);
+  EXPECT_TRUE(topo.closed_manifold()) << topo.summary();
+  EXPECT_EQ(topo.euler_characteristic, 2);
+  EXPECT_NEAR(topo.volume / double((hi - lo).prod()), 1.0, 0.03);
+}
+
 // The mesh's face normals against the views' normal maps: a box explains its own maps (all but the
 // pixels along its edges, where a face is seen edge-on), a sphere of the same size does not.
 TEST(SilhouetteFit, NormalMapErrorMeasuresHowWellAMeshExplainsTheMaps) {
