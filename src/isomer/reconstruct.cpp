@@ -5,7 +5,6 @@
 
 #include "core/error.h"
 #include "core/progress.h"
-#include "geometry/mesh_topology.h"
 #include "geometry/quadric_decimation.h"
 
 namespace u3d {
