@@ -142,18 +142,27 @@ TEST(SilhouetteFit, InitialMeshIsFittedOnlyWhenItMissesAMask) {
   EXPECT_FALSE(fitted);
 }
 
+// A plate seen edge-on by every view (a table top; faces on pixel borders of 256 px views), and the
+// same plate perforated: a 0.99 x 0.8 hole through its middle, open only to the top and the bottom.
+const Vec3f kPlateLo(-0.59375f, -0.046875f, -0.5f), kPlateHi(0.59375f, 0.046875f, 0.5f);
+
+Mesh perforated_plate() {
+  const float a = kPlateHi.x(), t = kPlateHi.y();
+  return union_of({{{-a, -t, 0.4f}, {a, t, 0.5f}},            // front rim
+                   {{-a, -t, -0.5f}, {a, t, -0.4f}},          // back rim
+                   {{-a, -t, -0.4f}, {-a + 0.1f, t, 0.4f}},   // left rim
+                   {{a - 0.1f, -t, -0.4f}, {a, t, 0.4f}}});   // right rim
+}
+
 // A table top whose middle the mesh lost: a hole through the plate, open only to the top and the
 // bottom, which no view looks from, so the silhouettes do not show it. Nothing the four views see
 // explains the hole (each view sees the plate's rim in front of it), and the fit closes it; counting
 // the mesh's share of the hull's columns alone keeps it (the rim fills 17-20 % of each column).
 TEST(SilhouetteFit, HoleNoViewSeesIsClosed) {
-  const float a = 0.59375f, t = 0.046875f;  // on pixel borders of the 256 px views
-  const Vec3f lo(-a, -t, -0.5f), hi(a, t, 0.5f);
+  const Vec3f lo = kPlateLo, hi = kPlateHi;
+  const float a = hi.x(), t = hi.y();
   const ViewSet views = boxes_views({{lo, hi}}, 256);
-  const Mesh perforated = union_of({{{-a, -t, 0.4f}, {a, t, 0.5f}},             // front rim
-                                    {{-a, -t, -0.5f}, {a, t, -0.4f}},           // back rim
-                                    {{-a, -t, -0.4f}, {-a + 0.1f, t, 0.4f}},    // left rim
-                                    {{a - 0.1f, -t, -0.4f}, {a, t, 0.4f}}});    // right rim
+  const Mesh perforated = perforated_plate();
   EXPECT_GT(min_iou(perforated, views), 0.99f);
   const double plate = double((hi - lo).prod());
   const std::optional<float> fill = carved_hull_fill(perforated, views, 128);
@@ -175,16 +184,12 @@ TEST(SilhouetteFit, HoleNoViewSeesIsClosed) {
 // above (a third of the plate's volume) gets the masks' hull, closed and solid.
 TEST(SilhouetteFit, OptimisedMeshIsFittedOnlyWhenItLosesAMaskOrItsVolume) {
   const SilhouetteFitOptions options;
-  const Vec3f lo(-0.59375f, -0.046875f, -0.5f), hi(0.59375f, 0.046875f, 0.5f);
+  const Vec3f lo = kPlateLo, hi = kPlateHi;
   const ViewSet views = boxes_views({{lo, hi}}, 256);
   const Mesh plate = box_mesh(lo, hi);
   EXPECT_FALSE(fit_optimised_mesh(plate, plate, views, options).has_value());
 
-  const float a = hi.x(), t = hi.y();
-  const Mesh perforated = union_of({{{-a, -t, 0.4f}, {a, t, 0.5f}},
-                                    {{-a, -t, -0.5f}, {a, t, -0.4f}},
-                                    {{-a, -t, -0.4f}, {-a + 0.1f, t, 0.4f}},
-                                    {{a - 0.1f, -t, -0.4f}, {a, t, 0.4f}}});
+  const Mesh perforated = perforated_plate();
   const std::optional<Mesh> fitted = fit_optimised_mesh(perforated, perforated, views, options);
   ASSERT_TRUE(fitted.has_value());
   const MeshTopology topo = mesh_topology(*fitted);
