@@ -210,3 +210,123 @@ def pth_zip(zip64):
 
 put("zip", "pth.zip", pth_zip(False))
 put("zip", "pth_zip64.zip", pth_zip(True))
+
+
+# ---- safetensors: every dtype the reader takes, an empty tensor, metadata, padding before the data
+def safetensors(tensors, metadata=None, pad=0):
+    header, data = {}, b""
+    for name, (dtype, shape, raw) in tensors.items():
+        header[name] = {"dtype": dtype, "shape": shape, "data_offsets": [len(data), len(data) + len(raw)]}
+        data += raw
+    if metadata:
+        header["__metadata__"] = metadata
+    text = json.dumps(header).encode() + b" " * pad
+    return struct.pack("<Q", len(text)) + text + data
+
+
+put("safetensors", "dtypes.safetensors", safetensors({
+    "f32": ("F32", [2, 2], struct.pack("<4f", 1, -2, 0.5, 3)), "f16": ("F16", [3], struct.pack("<3e", 1, 2, -0.5)),
+    "bf16": ("BF16", [2], b"\x80\x3f\x00\x40"), "f64": ("F64", [1], struct.pack("<d", 2.5)),
+    "i64": ("I64", [2], struct.pack("<2q", -1, 2**40)), "i32": ("I32", [1, 1], struct.pack("<i", 7)),
+    "u8": ("U8", [3], b"\x00\x7f\xff"), "bool": ("BOOL", [2], b"\x00\x01"), "empty": ("F32", [0, 3], b"")},
+    metadata={"format": "pt"}, pad=5))
+put("safetensors", "scalar.safetensors", safetensors({"s": ("F32", [], struct.pack("<f", 4))}))
+
+
+# ---- ONNX: a model of two Conv nodes whose initializers use each way of storing data the reader knows
+def varint(n):
+    out = b""
+    while True:
+        b = n & 0x7F
+        n >>= 7
+        if n:
+            out += bytes([b | 0x80])
+        else:
+            return out + bytes([b])
+
+
+def field(number, value):
+    if isinstance(value, int):
+        return varint(number << 3) + varint(value)
+    return varint(number << 3 | 2) + varint(len(value)) + value
+
+
+def onnx_tensor(name, dims, data_type, payload):
+    return b"".join(field(1, d) for d in dims) + field(2, data_type) + field(8, name.encode()) + payload
+
+
+def onnx_node(op, name, inputs, outputs):
+    return (b"".join(field(1, i.encode()) for i in inputs) + b"".join(field(2, o.encode()) for o in outputs) +
+            field(3, name.encode()) + field(4, op.encode()))
+
+
+initializers = [
+    onnx_tensor("conv0.weight", [1, 1, 1, 1], 1, field(9, struct.pack("<f", 0.5))),           # raw_data
+    onnx_tensor("conv0.bias", [1], 1, field(4, struct.pack("<f", 0.25))),                   # packed float_data
+    onnx_tensor("onnx::Conv_7", [1, 1, 1, 1], 10, field(9, struct.pack("<e", 2))),          # fp16 raw_data
+    onnx_tensor("onnx::Conv_8", [1], 11, field(10, struct.pack("<d", -1))),                 # double_data
+    onnx_tensor("shape", [2], 7, field(7, varint(1) + varint(3))),                          # packed int64_data
+    onnx_tensor("axes", [1], 6, field(5, varint(0))),                                       # int32_data
+]
+nodes = [onnx_node("Conv", "/conv0/Conv", ["x", "conv0.weight", "conv0.bias"], ["y"]),
+         onnx_node("Relu", "/act/Relu", ["y"], ["z"]),
+         onnx_node("Conv", "/conv1/Conv", ["z", "onnx::Conv_7", "onnx::Conv_8"], ["out"])]
+graph = b"".join(field(1, n) for n in nodes) + field(2, b"tiny") + b"".join(field(5, t) for t in initializers)
+put("onnx", "two_convs.onnx", field(1, 8) + field(2, b"pytorch") + field(7, graph))
+
+
+# ---- state dicts for a torch.save archive: fuzz_state_dict stores the pickle next to records data/0 to
+# data/3 of 16, 32, 64 and 0 bytes; a float view into a shared storage, a half storage, a parameter, a
+# nested {"params_ema": ...} dict as basicsr saves it
+class HalfStorage:
+    pass
+
+
+def _rebuild_parameter(*args):
+    pass
+
+
+torch.HalfStorage = HalfStorage
+HalfStorage.__module__, HalfStorage.__qualname__ = "torch", "HalfStorage"
+utils._rebuild_parameter = _rebuild_parameter
+_rebuild_parameter.__module__, _rebuild_parameter.__qualname__ = "torch._utils", "_rebuild_parameter"
+
+
+class View:
+    def __init__(self, storage, key, numel, offset, size, stride):
+        self.args = (("storage", storage, key, "cpu", numel), offset, size, stride)
+
+    def __reduce__(self):
+        return (_rebuild_tensor_v2, self.args + (False, collections.OrderedDict()))
+
+
+class Parameter:
+    def __init__(self, view):
+        self.view = view
+
+    def __reduce__(self):
+        return (_rebuild_parameter, (self.view, True, collections.OrderedDict()))
+
+
+archive_state = collections.OrderedDict([
+    ("conv.weight", View(FloatStorage, "0", 4, 0, (2, 2), (2, 1))),
+    ("conv.bias", View(FloatStorage, "0", 4, 2, (2,), (1,))),          # shares storage 0
+    ("norm.weight", Parameter(View(HalfStorage, "1", 16, 0, (4, 4), (1, 4)))),  # transposed
+    ("big", View(FloatStorage, "2", 16, 0, (16,), (1,))),
+    ("empty", View(FloatStorage, "3", 0, 0, (0, 3), (3, 1)))])
+put("state_dict", "views_p2.pkl", dumps(archive_state, 2))
+put("state_dict", "nested_p4.pkl", dumps({"params_ema": archive_state}, 4))
+
+
+# ---- whole .pth files as torch.save writes them (stored records under "<name>/", a byteorder record)
+def pth_file(pkl, records):
+    out = io.BytesIO()
+    with zipfile.ZipFile(out, "w", compression=zipfile.ZIP_STORED) as z:
+        for name, data in [("archive/data.pkl", pkl), ("archive/byteorder", b"little")] + records + \
+                          [("archive/version", b"3\n")]:
+            z.writestr(zipfile.ZipInfo(name), data)
+    return out.getvalue()
+
+
+put("pth", "views.pth", pth_file(dumps(archive_state, 2),
+                                 [("archive/data/%d" % i, bytes(range(n))) for i, n in enumerate([16, 32, 64, 0])]))

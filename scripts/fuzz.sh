@@ -6,7 +6,8 @@
 # Exits non-zero when any target finds a crash, sanitizer report, leak, timeout or out-of-memory; the
 # input that caused it is left in build-fuzz/artifacts/<target>/. Prints executions per second and
 # coverage per target at the end.
-#   scripts/fuzz.sh [SECONDS] [TARGET...]     targets: image obj mtl ply gltf config pickle zip
+#   scripts/fuzz.sh [SECONDS] [TARGET...]
+#     targets: image obj mtl ply gltf config pickle zip safetensors onnx pth state_dict
 # Environment: FUZZ_JOBS (build jobs, default all cores); FUZZ_SEED (libFuzzer's -seed, so that a run from
 # the same corpus repeats; scripts/test.sh sets it).
 set -euo pipefail
@@ -14,7 +15,7 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
 seconds="${1:-30}"
 [ $# -gt 0 ] && shift
-all_targets=(image obj mtl ply gltf config pickle zip)
+all_targets=(image obj mtl ply gltf config pickle zip safetensors onnx pth state_dict)
 targets=("$@")
 [ ${#targets[@]} -eq 0 ] && targets=("${all_targets[@]}")
 
@@ -64,13 +65,21 @@ seeds_from gltf
 seeds_from config tests/data/nn/*/config.json tests/data/nn/*/*_config*.json tests/data/nn/scheduler/tolerances.json
 seeds_from pickle
 seeds_from zip tests/data/nn/unet_mv/weights.pth
+seeds_from safetensors tests/data/nn/clip_text/inputs.safetensors tests/data/nn/clip_tokenizer/input_ids.safetensors \
+  tests/data/nn/ip_adapter/inputs.safetensors
+seeds_from onnx tests/data/nn/realesrgan_tiny/rrdbnet_tiny_op11.onnx
+seeds_from pth
+seeds_from state_dict fuzz/corpus/pickle/state_dict_p2.pkl fuzz/corpus/pickle/state_dict_p4.pkl
 # The pickle of a real torch.save checkpoint, taken out of its zip.
 python3 -c "import sys, zipfile; z = zipfile.ZipFile(sys.argv[1]); open(sys.argv[2], 'wb').write(z.read('weights/data.pkl'))" \
   tests/data/nn/unet_mv/weights.pth "$build/seeds/pickle/unet_mv_data.pkl"
 
 # Longest input each target tries: large enough for the fixtures that matter, small enough to stay fast.
-declare -A max_len=([image]=131072 [obj]=65536 [mtl]=4096 [ply]=16384 [gltf]=16384 [config]=16384 [pickle]=65536 [zip]=65536)
+declare -A max_len=([image]=131072 [obj]=65536 [mtl]=4096 [ply]=16384 [gltf]=16384 [config]=16384 [pickle]=65536 [zip]=65536
+  [safetensors]=16384 [onnx]=131072 [pth]=16384 [state_dict]=16384)
 
+# Leaks inside libtorch itself are not reported (fuzz/lsan.supp says why).
+export LSAN_OPTIONS="suppressions=$root/fuzz/lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
 failed=()
 summary=()
 for t in "${targets[@]}"; do

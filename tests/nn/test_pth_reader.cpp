@@ -5,7 +5,9 @@
 
 #include <fstream>
 #include <functional>
+#include <map>
 #include <string>
+#include <vector>
 #include <unistd.h>
 
 #include "core/error.h"
@@ -226,6 +228,42 @@ TEST_F(PthTest, ZipRecordsOutsideTheFileOrOverlappingAreRefused) {
                     (uint32_t(uint8_t(entry0[45])) << 24));
   });
   expect_error(overlap, {"overlap.pth", "corrupt"});
+}
+
+// Archives that break torch.save's layout are refused by the reader's own check of the zip directory,
+// before libtorch opens them (libtorch's reader leaks when it refuses a file; fuzz/lsan.supp): each edit
+// below renames entries of a well-formed archive, in its central directory, its local headers, or both.
+TEST_F(PthTest, ArchivesOutsideTorchSaveLayoutAreRefusedBeforeLibtorchOpensThem) {
+  PickleWriter p;
+  p.empty_ordered_dict().mark().str("a").tensor("FloatStorage", "0", 4, 0, {4}, {1});
+  p.str("b").tensor("FloatStorage", "1", 4, 0, {4}, {1}).op('u');
+  const std::map<std::string, std::string> records{{"0", std::string(16, '\0')}, {"1", std::string(16, '\0')}};
+  // Writes the archive `name`.pth (whose folder is `name`), replacing `from` by `to` (same length) at the
+  // given occurrences: 0 is the local header, 1 the central directory; {} is every occurrence.
+  auto edited = [&](const std::string& name, const std::string& from, const std::string& to, std::vector<int> which) {
+    const fs::path path = write_pth(name, p.finish(), records);
+    std::string bytes;
+    {
+      std::ifstream in(path, std::ios::binary);
+      bytes.assign((std::istreambuf_iterator<char>(in)), {});
+    }
+    std::vector<size_t> at;
+    for (size_t pos = bytes.find(from); pos != std::string::npos; pos = bytes.find(from, pos + 1)) at.push_back(pos);
+    EXPECT_EQ(at.size(), 2u) << from;  // one local header and one directory entry
+    if (which.empty()) which = {0, 1};
+    for (int k : which) bytes.replace(at.at(size_t(k)), from.size(), to);
+    std::ofstream(path, std::ios::binary | std::ios::trunc).write(bytes.data(), std::streamsize(bytes.size()));
+    return path;
+  };
+  EXPECT_EQ(load_pth(edited("plain", "plain/data/1", "plain/data/1", {})).size(), 2u);  // the unedited archive loads
+  expect_error(edited("folder", "folder/data/1", "folder_data/1", {}), {"folder.pth", "outside the folder folder/"});
+  expect_error(edited("loose", "loose/data/1", "loose_data_1", {}),
+               {"loose.pth", "loose_data_1 is not inside a folder"});
+  expect_error(edited("twice", "twice/data/1", "twice/data/0", {}), {"twice.pth", "two entries named twice/data/0"});
+  expect_error(edited("local", "local/data/1", "local/data/2", {0}),
+               {"local.pth", "local/data/1 does not match its local header"});
+  expect_error(edited("unversioned", "unversioned/version", "unversioned/vers1on", {}),
+               {"unversioned.pth", "without a version record"});
 }
 
 TEST_F(PthTest, TruncatedArchiveNamesTheFile) {

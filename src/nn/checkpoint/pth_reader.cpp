@@ -135,11 +135,13 @@ void check_zip_magic(const std::filesystem::path& path) {
           path.string() + ": not a PyTorch zip checkpoint (no zip header)");
 }
 
-// Reads records and checks each against the CRC-32 in the zip directory (libtorch does not).
+// Reads records and checks each against the CRC-32 in the zip directory (libtorch does not). The
+// directory is read and checked before libtorch opens the archive: libtorch 1.13's reader leaks its zip
+// state when its constructor throws, so a malformed archive should not get that far.
 class RecordReader {
  public:
   explicit RecordReader(const std::filesystem::path& path)
-      : source_(path.string()), reader_(source_), records_(zip_records(path)) {}
+      : source_(path.string()), records_(checked_records(path)), reader_(source_) {}
 
   bool has(const std::string& name) { return reader_.hasRecord(name); }
   // The record's size from the zip directory, without reading it.
@@ -159,9 +161,17 @@ class RecordReader {
   }
 
  private:
+  // The zip directory, with the version record libtorch's reader requires (torch.save writes one).
+  static std::map<std::string, ZipRecord> checked_records(const std::filesystem::path& path) {
+    std::map<std::string, ZipRecord> records = zip_records(path);
+    require(records.count("version") || records.count(".data/version"),
+            path.string() + ": zip archive without a version record (not a torch.save file)");
+    return records;
+  }
+
   std::string source_;
-  caffe2::serialize::PyTorchStreamReader reader_;
   std::map<std::string, ZipRecord> records_;
+  caffe2::serialize::PyTorchStreamReader reader_;
 };
 
 // Reads each storage record once, so tensors sharing a storage share it here too.

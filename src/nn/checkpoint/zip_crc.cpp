@@ -35,7 +35,9 @@ std::map<std::string, ZipRecord> zip_records(const std::filesystem::path& path) 
   std::ifstream in(path, std::ios::binary);
   require(bool(in), "cannot open " + source);
   const uint64_t file_size = std::filesystem::file_size(path);
-  auto bad = [&](const std::string& what) { return Error(source + ": corrupt zip directory (" + what + ")"); };
+  auto bad = [&](const std::string& what) {
+    return Error(source + ": corrupt or truncated zip archive (" + what + ")");
+  };
 
   // End of central directory record: 22 bytes plus a comment of up to 64 KiB, at the end of the file.
   const uint64_t tail_size = std::min<uint64_t>(file_size, 22 + 65535);
@@ -58,6 +60,7 @@ std::map<std::string, ZipRecord> zip_records(const std::filesystem::path& path) 
 
   const std::string dir = read_at(in, dir_offset, dir_size, source);
   std::map<std::string, ZipRecord> records;
+  std::string folder;
   size_t pos = 0;
   for (uint64_t i = 0; i < entries; ++i) {
     if (pos + 46 > dir.size() || dir.compare(pos, 4, std::string("PK\x01\x02", 4)) != 0) throw bad("bad entry header");
@@ -84,8 +87,21 @@ std::map<std::string, ZipRecord> zip_records(const std::filesystem::path& path) 
     }
     if (offset > dir_offset || compressed > dir_offset - offset)
       throw bad("entry " + name + " lies outside the file (truncated download?)");
+    // The entry's local header, in front of its data, must be there and name the same entry.
+    if (dir_offset - offset - compressed < 30) throw bad("entry " + name + " has no room for its local header");
+    const std::string local = read_at(in, offset, 30, source);
+    const uint64_t local_name_len = le(local, 26, 2), local_extra_len = le(local, 28, 2);
+    if (local.compare(0, 4, std::string("PK\x03\x04", 4)) != 0 || local_name_len != name_len ||
+        read_at(in, offset + 30, name_len, source) != name)
+      throw bad("entry " + name + " does not match its local header");
+    if (dir_offset - offset - compressed < 30 + local_name_len + local_extra_len)
+      throw bad("entry " + name + " lies outside the file (truncated download?)");
+    // torch.save puts every record in one top-level folder, named after the checkpoint.
     const size_t slash = name.find('/');
-    records[slash == std::string::npos ? name : name.substr(slash + 1)] = {crc, size};
+    if (slash == std::string::npos) throw bad("entry " + name + " is not inside a folder");
+    if (i == 0) folder = name.substr(0, slash + 1);
+    if (name.compare(0, slash + 1, folder) != 0) throw bad("entry " + name + " is outside the folder " + folder);
+    if (!records.emplace(name.substr(slash + 1), ZipRecord{crc, size}).second) throw bad("two entries named " + name);
     pos += 46 + name_len + extra_len + comment_len;
   }
   return records;
