@@ -3,11 +3,14 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/png_decoder.h"
 
 namespace u3d {
 
@@ -45,6 +48,12 @@ Image load_image(const fs::path& path) {
     in.read(reinterpret_cast<char*>(head), sizeof(head));
     if (is_dicom_signature(head, size_t(in.gcount())))
       throw Error("cannot decode image " + path.string() + ": a DICOM file, not a PNG/JPEG image");
+    if (is_png_signature(head, size_t(in.gcount()))) {
+      in.clear();  // a file shorter than the head read ended the stream
+      in.seekg(0);
+      const std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      return decode_png(bytes.data(), bytes.size(), "image " + path.string());
+    }
   }
   cv::Mat m;
   try {

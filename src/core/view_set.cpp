@@ -8,6 +8,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/png_decoder.h"
 #include "core/progress.h"
 
 namespace u3d {
@@ -20,11 +21,10 @@ constexpr float kMinMeanFacing = 0.1f;
 constexpr int kMinResolution = 16;
 
 bool has_png_signature(const std::filesystem::path& path) {
-  static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   std::ifstream in(path, std::ios::binary);
   unsigned char head[8] = {};
   in.read(reinterpret_cast<char*>(head), 8);
-  return in.gcount() == 8 && std::equal(head, head + 8, kSignature);
+  return is_png_signature(head, size_t(in.gcount()));
 }
 
 void require_finite(const Image& image, const std::string& name) {

@@ -1,0 +1,128 @@
+#include "core/png_decoder.h"
+
+#include <png.h>
+
+#include <bit>
+#include <cstring>
+#include <vector>
+
+#include "core/error.h"
+#include "core/progress.h"
+
+namespace u3d {
+
+static_assert(std::endian::native == std::endian::little, "16-bit samples are byte-swapped for a little-endian host");
+
+namespace {
+
+// Everything the libpng callbacks touch, and everything that must survive a longjmp back to the
+// setjmp in decode_png: libpng's error path jumps over the frames between, so no C++ object may live
+// in them, and locals modified after setjmp would be indeterminate after the jump.
+struct PngRead {
+  const unsigned char* bytes = nullptr;
+  size_t size = 0;
+  size_t offset = 0;
+  std::string error;                  // libpng's reason, set before it jumps back
+  std::vector<std::string> warnings;  // reported once decoding ends
+  std::vector<unsigned char> pixels;
+  std::vector<png_bytep> rows;
+  png_structp png = nullptr;
+  png_infop info = nullptr;
+  ~PngRead() { png_destroy_read_struct(&png, info ? &info : nullptr, nullptr); }
+};
+
+void on_error(png_structp png, png_const_charp message) {
+  auto* read = static_cast<PngRead*>(png_get_error_ptr(png));
+  read->error = message ? message : "unknown libpng error";
+  png_longjmp(png, 1);
+}
+
+void on_warning(png_structp png, png_const_charp message) {
+  auto* read = static_cast<PngRead*>(png_get_error_ptr(png));
+  if (read->warnings.size() < 8) read->warnings.emplace_back(message ? message : "unknown libpng warning");
+}
+
+void on_read(png_structp png, png_bytep out, png_size_t count) {
+  auto* read = static_cast<PngRead*>(png_get_io_ptr(png));
+  if (count > read->size - read->offset) png_error(png, "the data ends early (truncated file)");
+  std::memcpy(out, read->bytes + read->offset, count);
+  read->offset += count;
+}
+
+// The libpng calls, between setjmp and the end of reading. Returns false when libpng jumped back with
+// an error (in read.error). Nothing here has a destructor: all state is in `read`.
+bool read_pixels(PngRead& read, int& width, int& height, int& channels, int& depth) {
+  if (setjmp(png_jmpbuf(read.png))) return false;
+  png_set_read_fn(read.png, &read, on_read);
+  png_read_info(read.png, read.info);
+  const png_uint_32 w = png_get_image_width(read.png, read.info), h = png_get_image_height(read.png, read.info);
+  const int color_type = png_get_color_type(read.png, read.info);
+  const int bit_depth = png_get_bit_depth(read.png, read.info);
+  if (uint64_t(w) * h > (uint64_t(1) << 30)) {
+    read.error = "larger than the 2^30 pixels an image may have";
+    return false;
+  }
+  const bool has_trns = png_get_valid(read.png, read.info, PNG_INFO_tRNS) != 0;
+  // OpenCV's channel counts for IMREAD_UNCHANGED.
+  switch (color_type) {
+    case PNG_COLOR_TYPE_GRAY: channels = 1; break;
+    case PNG_COLOR_TYPE_GRAY_ALPHA:
+    case PNG_COLOR_TYPE_RGB_ALPHA: channels = 4; break;
+    default: channels = has_trns ? 4 : 3; break;  // RGB, palette
+  }
+  depth = bit_depth == 16 ? 16 : 8;
+  if (color_type == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(read.png);
+  if (color_type == PNG_COLOR_TYPE_GRAY && bit_depth < 8) png_set_expand_gray_1_2_4_to_8(read.png);
+  if (channels == 4 && has_trns) png_set_tRNS_to_alpha(read.png);
+  if (color_type == PNG_COLOR_TYPE_GRAY_ALPHA) png_set_gray_to_rgb(read.png);
+  if (depth == 16) png_set_swap(read.png);  // PNG stores big-endian samples; the host is little-endian
+  png_set_interlace_handling(read.png);
+  png_read_update_info(read.png, read.info);
+  const size_t row_bytes = png_get_rowbytes(read.png, read.info);
+  if (row_bytes != size_t(w) * size_t(channels) * size_t(depth / 8)) {
+    read.error = "unexpected row size after the colour conversions";
+    return false;
+  }
+  read.pixels.resize(row_bytes * h);
+  read.rows.resize(h);
+  for (png_uint_32 y = 0; y < h; ++y) read.rows[y] = read.pixels.data() + size_t(y) * row_bytes;
+  png_read_image(read.png, read.rows.data());
+  png_read_end(read.png, nullptr);
+  width = int(w);
+  height = int(h);
+  return true;
+}
+
+}  // namespace
+
+bool is_png_signature(const unsigned char* bytes, size_t size) {
+  static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  return size >= 8 && std::memcmp(bytes, kSignature, 8) == 0;
+}
+
+Image decode_png(const unsigned char* bytes, size_t size, const std::string& what) {
+  PngRead read;
+  read.bytes = bytes;
+  read.size = size;
+  read.png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &read, on_error, on_warning);
+  if (read.png) read.info = png_create_info_struct(read.png);
+  require(read.png && read.info, "cannot decode " + what + ": out of memory");
+  int width = 0, height = 0, channels = 0, depth = 0;
+  const bool ok = read_pixels(read, width, height, channels, depth);
+  for (const std::string& warning : read.warnings) progress("warning: " + what + ": " + warning);
+  if (!ok) throw Error("cannot decode " + what + ": " + read.error);
+
+  Image image(width, height, channels);
+  if (depth == 16) {
+    std::vector<uint16_t> samples(image.data.size());
+    std::memcpy(samples.data(), read.pixels.data(), samples.size() * 2);
+    const float scale = float(1.0 / 65535.0);  // as load_image scales OpenCV's 16-bit images
+    for (size_t i = 0; i < samples.size(); ++i) image.data[i] = float(samples[i]) * scale;
+  } else {
+    const float scale = float(1.0 / 255.0);
+    for (size_t i = 0; i < image.data.size(); ++i) image.data[i] = float(read.pixels[i]) * scale;
+  }
+  return image;
+}
+
+}  // namespace u3d
