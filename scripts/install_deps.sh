@@ -10,7 +10,7 @@ PACKAGES=(
   libopencv-dev libeigen3-dev libopen3d-dev libtinygltf-dev
   libcli11-dev nlohmann-json3-dev libstb-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  zlib1g-dev libicu-dev libpng-dev
+  zlib1g-dev libicu-dev libpng-dev libjpeg-dev
 )
 
 SUDO=""

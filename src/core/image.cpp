@@ -10,7 +10,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
-#include "core/png_decoder.h"
+#include "core/image_decode.h"
 
 namespace u3d {
 
@@ -48,11 +48,13 @@ Image load_image(const fs::path& path) {
     in.read(reinterpret_cast<char*>(head), sizeof(head));
     if (is_dicom_signature(head, size_t(in.gcount())))
       throw Error("cannot decode image " + path.string() + ": a DICOM file, not a PNG/JPEG image");
-    if (is_png_signature(head, size_t(in.gcount()))) {
+    const bool png = is_png_signature(head, size_t(in.gcount())), jpeg = is_jpeg_signature(head, size_t(in.gcount()));
+    if (png || jpeg) {
       in.clear();  // a file shorter than the head read ended the stream
       in.seekg(0);
       const std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-      return decode_png(bytes.data(), bytes.size(), "image " + path.string());
+      const std::string what = "image " + path.string();
+      return png ? decode_png(bytes.data(), bytes.size(), what) : decode_jpeg(bytes.data(), bytes.size(), what);
     }
   }
   cv::Mat m;

@@ -8,7 +8,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
-#include "core/png_decoder.h"
+#include "core/image_decode.h"
 #include "core/progress.h"
 
 namespace u3d {

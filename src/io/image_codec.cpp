@@ -5,7 +5,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
-#include "core/png_decoder.h"
+#include "core/image_decode.h"
 
 namespace u3d {
 
@@ -13,6 +13,7 @@ Image decode_image(const unsigned char* bytes, size_t size, const std::string& w
   require(size > 0, "cannot decode " + what + ": no image data");
   require(!is_dicom_signature(bytes, size), "cannot decode " + what + ": DICOM data, not a PNG/JPEG image");
   if (is_png_signature(bytes, size)) return decode_png(bytes, size, what);
+  if (is_jpeg_signature(bytes, size)) return decode_jpeg(bytes, size, what);
   cv::Mat encoded(1, int(size), CV_8U, const_cast<unsigned char*>(bytes));
   cv::Mat m;
   try {

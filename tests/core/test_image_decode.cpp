@@ -1,11 +1,16 @@
-// The PNG decoder (core/png_decoder.h) that load_image and decode_image use: the same pixels as OpenCV's
+// The PNG decoder (core/image_decode.h) that load_image and decode_image use: the same pixels as OpenCV's
 // decoder for every colour type, bit depth, transparency chunk and interlacing, and libpng's errors and
 // warnings in the project's words instead of libpng's own stderr lines.
 #include <gtest/gtest.h>
 
 #include <unistd.h>
 
+// jpeglib.h needs size_t and FILE declared before it.
+#include <jpeglib.h>
+#include <cstdio>
+
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
@@ -15,7 +20,7 @@
 
 #include "core/error.h"
 #include "core/image.h"
-#include "core/png_decoder.h"
+#include "core/image_decode.h"
 #include "core/progress.h"
 
 namespace fs = std::filesystem;
@@ -125,6 +130,46 @@ Image decode(const std::string& png, const std::string& what = "test.png") {
   return decode_png(reinterpret_cast<const unsigned char*>(png.data()), png.size(), what);
 }
 
+void expect_same_pixels(const Image& got, const Image& expected) {
+  ASSERT_EQ(got.width, expected.width);
+  ASSERT_EQ(got.height, expected.height);
+  ASSERT_EQ(got.channels, expected.channels);
+  for (size_t i = 0; i < got.data.size(); ++i) ASSERT_EQ(got.data[i], expected.data[i]) << "sample " << i;
+}
+
+// A JPEG written by libjpeg's compressor, for what OpenCV 4.6 cannot encode: CMYK (written inverted with
+// an Adobe marker, as Adobe applications write it; `components` 4) and colour without chroma subsampling
+// (`full_chroma`). The samples are a fixed pattern.
+std::string libjpeg_encode(int width, int height, int components, bool full_chroma) {
+  jpeg_compress_struct info{};
+  jpeg_error_mgr errors{};
+  info.err = jpeg_std_error(&errors);
+  jpeg_create_compress(&info);
+  unsigned char* out = nullptr;
+  unsigned long out_size = 0;
+  jpeg_mem_dest(&info, &out, &out_size);
+  info.image_width = JDIMENSION(width);
+  info.image_height = JDIMENSION(height);
+  info.input_components = components;
+  info.in_color_space = components == 4 ? JCS_CMYK : JCS_RGB;
+  jpeg_set_defaults(&info);  // CMYK input: CMYK in the file, with the Adobe marker
+  if (full_chroma) info.comp_info[0].h_samp_factor = info.comp_info[0].v_samp_factor = 1;
+  jpeg_start_compress(&info, TRUE);
+  std::vector<unsigned char> row(size_t(width) * size_t(components));
+  while (info.next_scanline < info.image_height) {
+    for (int x = 0; x < width; ++x)
+      for (int c = 0; c < components; ++c)
+        row[size_t(x * components + c)] = (unsigned char)((x * 37 + int(info.next_scanline) * 11 + c * 60) % 256);
+    JSAMPROW rows[1] = {row.data()};
+    jpeg_write_scanlines(&info, rows, 1);
+  }
+  jpeg_finish_compress(&info);
+  std::string bytes(reinterpret_cast<char*>(out), out_size);
+  jpeg_destroy_compress(&info);
+  std::free(out);
+  return bytes;
+}
+
 // Collects progress messages.
 struct Messages : ProgressListener {
   std::vector<std::string> lines;
@@ -135,7 +180,7 @@ struct Messages : ProgressListener {
 
 }  // namespace
 
-TEST(PngDecoder, SamePixelsAsOpenCvForEveryColourTypeDepthTransparencyAndInterlacing) {
+TEST(ImageDecode, PngPixelsAreOpenCvsForEveryColourTypeDepthTransparencyAndInterlacing) {
   struct Case {
     std::string name;
     int color_type, bit_depth;
@@ -174,12 +219,8 @@ TEST(PngDecoder, SamePixelsAsOpenCvForEveryColourTypeDepthTransparencyAndInterla
       SCOPED_TRACE(c.name + (interlaced ? ", interlaced" : ""));
       const std::string png = make_png(width, height, c.color_type, c.bit_depth, samples, interlaced, c.extra);
       const Image expected = opencv_decode(png);
-      const Image got = decode(png);
       ASSERT_EQ(expected.channels, c.channels);
-      ASSERT_EQ(got.width, width);
-      ASSERT_EQ(got.height, height);
-      ASSERT_EQ(got.channels, expected.channels);
-      for (size_t i = 0; i < got.data.size(); ++i) ASSERT_EQ(got.data[i], expected.data[i]) << "sample " << i;
+      expect_same_pixels(decode(png), expected);
     }
   }
 }
@@ -188,7 +229,7 @@ TEST(PngDecoder, SamePixelsAsOpenCvForEveryColourTypeDepthTransparencyAndInterla
 // broken IDAT is a libpng error. Neither may print libpng's own lines ("libpng warning: ...", as OpenCV's
 // decoder let them): load_image reports the warning as a progress message naming the file, and the error
 // as the Error's reason.
-TEST(PngDecoder, LibpngMessagesComeInTheProjectsWords) {
+TEST(ImageDecode, LibpngMessagesComeInTheProjectsWords) {
   const fs::path dir = fs::temp_directory_path() / ("u3d_test_png_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   auto write = [&](const std::string& name, const std::string& bytes) {
@@ -238,5 +279,72 @@ TEST(PngDecoder, LibpngMessagesComeInTheProjectsWords) {
   }
   printed = testing::internal::GetCapturedStderr();
   EXPECT_EQ(printed, "");
+  fs::remove_all(dir);
+}
+
+TEST(ImageDecode, JpegPixelsAreOpenCvsForGrayColourAndCmyk) {
+  cv::Mat colour(37, 53, CV_8UC3), gray(37, 53, CV_8UC1);
+  cv::randu(colour, 0, 256);
+  cv::randu(gray, 0, 256);
+  std::vector<std::string> jpegs;
+  for (const cv::Mat& m : {colour, gray})
+    for (int progressive : {0, 1}) {
+      std::vector<unsigned char> bytes;
+      cv::imencode(".jpg", m, bytes, {cv::IMWRITE_JPEG_QUALITY, 90, cv::IMWRITE_JPEG_PROGRESSIVE, progressive});
+      jpegs.emplace_back(bytes.begin(), bytes.end());
+    }
+  jpegs.push_back(libjpeg_encode(29, 17, 3, true));
+  jpegs.push_back(libjpeg_encode(29, 17, 4, false));
+  for (size_t j = 0; j < jpegs.size(); ++j) {
+    SCOPED_TRACE("jpeg " + std::to_string(j));
+    const std::string& jpeg = jpegs[j];
+    ASSERT_TRUE(is_jpeg_signature(reinterpret_cast<const unsigned char*>(jpeg.data()), jpeg.size()));
+    const Image expected = opencv_decode(jpeg);
+    const Image got = decode_jpeg(reinterpret_cast<const unsigned char*>(jpeg.data()), jpeg.size(), "test.jpg");
+    EXPECT_EQ(got.channels, j == 2 || j == 3 ? 1 : 3);
+    expect_same_pixels(got, expected);
+  }
+}
+
+// A JPEG that ends early is decoded (libjpeg fills the rest in) with a warning; one whose header is
+// corrupt is an error. Neither may print libjpeg's own lines ("Premature end of JPEG file").
+TEST(ImageDecode, LibjpegMessagesComeInTheProjectsWords) {
+  const fs::path dir = fs::temp_directory_path() / ("u3d_test_jpeg_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  cv::Mat colour(64, 64, CV_8UC3);
+  cv::randu(colour, 0, 256);
+  std::vector<unsigned char> bytes;
+  cv::imencode(".jpg", colour, bytes);
+  const std::string jpeg(bytes.begin(), bytes.end());
+
+  const fs::path cut = dir / "cut.jpg";
+  std::ofstream(cut, std::ios::binary) << jpeg.substr(0, jpeg.size() * 2 / 3);
+  Messages messages;
+  testing::internal::CaptureStderr();
+  Image image;
+  {
+    ProgressScope scope(&messages);
+    image = load_image(cut);
+  }
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
+  EXPECT_EQ(image.width, 64);
+  ASSERT_EQ(messages.lines.size(), 1u);
+  EXPECT_EQ(messages.lines[0], "warning: image " + cut.string() + ": Premature end of JPEG file");
+
+  std::string corrupt = jpeg;
+  const size_t sof = corrupt.find("\xff\xc0");
+  ASSERT_NE(sof, std::string::npos);
+  corrupt[sof + 4] = char(0xff);  // the frame header's length runs past the file's markers
+  corrupt[sof + 9] = char(7);     // seven components
+  const fs::path bad = dir / "bad.jpg";
+  std::ofstream(bad, std::ios::binary) << corrupt;
+  testing::internal::CaptureStderr();
+  try {
+    load_image(bad);
+    ADD_FAILURE() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("cannot decode image " + bad.string() + ": ", 0), 0u) << e.what();
+  }
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
   fs::remove_all(dir);
 }

@@ -1,8 +1,12 @@
-#include "core/png_decoder.h"
+#include "core/image_decode.h"
 
 #include <png.h>
+// jpeglib.h needs size_t and FILE declared before it.
+#include <jpeglib.h>
+#include <cstdio>
 
 #include <bit>
+#include <csetjmp>
 #include <cstring>
 #include <vector>
 
@@ -121,6 +125,101 @@ Image decode_png(const unsigned char* bytes, size_t size, const std::string& wha
   } else {
     const float scale = float(1.0 / 255.0);
     for (size_t i = 0; i < image.data.size(); ++i) image.data[i] = float(read.pixels[i]) * scale;
+  }
+  return image;
+}
+
+namespace {
+
+// As PngRead, for libjpeg: its error handler longjmps back to read_jpeg_pixels.
+struct JpegRead {
+  jpeg_decompress_struct info{};
+  jpeg_error_mgr errors{};
+  std::jmp_buf jump;
+  bool created = false;
+  std::string error;
+  std::vector<std::string> warnings;
+  std::vector<unsigned char> pixels;
+  ~JpegRead() {
+    if (created) jpeg_destroy_decompress(&info);
+  }
+};
+
+std::string jpeg_message(j_common_ptr info) {
+  char text[JMSG_LENGTH_MAX] = {};
+  info->err->format_message(info, text);
+  return text;
+}
+
+void on_jpeg_error(j_common_ptr info) {
+  auto* read = static_cast<JpegRead*>(info->client_data);
+  read->error = jpeg_message(info);
+  std::longjmp(read->jump, 1);
+}
+
+// libjpeg's default emit_message passes the first warning (and trace messages, which are off) here.
+void on_jpeg_message(j_common_ptr info) {
+  auto* read = static_cast<JpegRead*>(info->client_data);
+  if (read->warnings.size() < 8) read->warnings.push_back(jpeg_message(info));
+}
+
+bool read_jpeg_pixels(JpegRead& read, const unsigned char* bytes, size_t size, int& width, int& height, int& channels) {
+  if (setjmp(read.jump)) return false;
+  read.info.err = jpeg_std_error(&read.errors);
+  read.errors.error_exit = on_jpeg_error;
+  read.errors.output_message = on_jpeg_message;
+  read.info.client_data = &read;
+  jpeg_create_decompress(&read.info);
+  read.created = true;
+  jpeg_mem_src(&read.info, bytes, static_cast<unsigned long>(size));
+  jpeg_read_header(&read.info, TRUE);
+  if (uint64_t(read.info.image_width) * read.info.image_height > (uint64_t(1) << 30)) {
+    read.error = "larger than the 2^30 pixels an image may have";
+    return false;
+  }
+  // As OpenCV: gray stays gray, four components (CMYK, YCCK) come out as CMYK and are converted below,
+  // everything else as RGB.
+  const bool four = read.info.num_components == 4;
+  read.info.out_color_space = four ? JCS_CMYK : read.info.num_components == 1 ? JCS_GRAYSCALE : JCS_RGB;
+  jpeg_start_decompress(&read.info);
+  const size_t stride = size_t(read.info.output_width) * size_t(read.info.output_components);
+  read.pixels.resize(stride * read.info.output_height);
+  while (read.info.output_scanline < read.info.output_height) {
+    JSAMPROW row = read.pixels.data() + size_t(read.info.output_scanline) * stride;
+    jpeg_read_scanlines(&read.info, &row, 1);
+  }
+  jpeg_finish_decompress(&read.info);
+  width = int(read.info.output_width);
+  height = int(read.info.output_height);
+  channels = read.info.output_components;
+  return true;
+}
+
+}  // namespace
+
+bool is_jpeg_signature(const unsigned char* bytes, size_t size) {
+  return size >= 3 && bytes[0] == 0xff && bytes[1] == 0xd8 && bytes[2] == 0xff;
+}
+
+Image decode_jpeg(const unsigned char* bytes, size_t size, const std::string& what) {
+  JpegRead read;
+  int width = 0, height = 0, channels = 0;
+  const bool ok = read_jpeg_pixels(read, bytes, size, width, height, channels);
+  for (const std::string& warning : read.warnings) progress("warning: " + what + ": " + warning);
+  if (!ok) throw Error("cannot decode " + what + ": " + read.error);
+  require(channels == 1 || channels == 3 || channels == 4,
+          "cannot decode " + what + ": " + std::to_string(channels) + " colour components");
+  const float scale = float(1.0 / 255.0);
+  Image image(width, height, channels == 1 ? 1 : 3);
+  if (channels != 4) {
+    for (size_t i = 0; i < image.data.size(); ++i) image.data[i] = float(read.pixels[i]) * scale;
+    return image;
+  }
+  // Inverted CMYK (what Adobe writes and libjpeg hands out), converted to RGB as OpenCV converts it.
+  for (size_t p = 0; p < image.pixel_count(); ++p) {
+    const unsigned char* cmyk = read.pixels.data() + p * 4;
+    const int k = cmyk[3];
+    for (int c = 0; c < 3; ++c) image.data[p * 3 + c] = float(k - ((255 - cmyk[c]) * k >> 8)) * scale;
   }
   return image;
 }
