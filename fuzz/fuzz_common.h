@@ -5,6 +5,7 @@
 // leak, a timeout) escapes to libFuzzer and is a finding.
 #include <stdlib.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -47,6 +48,25 @@ inline std::filesystem::path write_scratch_file(const std::string& name, const u
   out.close();
   if (!out) std::abort();  // the harness itself failed, not the reader
   return path;
+}
+
+// The image decoders accept up to 2^30 pixels (core/image_decode.h), which a 30-byte header can claim;
+// the fuzz run's RSS limit would report the allocation as a crash. True when the bytes claim more than
+// 2^22 pixels anywhere a decoder could find a size: after any PNG "IHDR" chunk type, or in any JPEG
+// start-of-frame marker, wherever they stand (inside a GLB's buffer too; not inside base64 data URIs).
+// Such inputs are skipped.
+inline bool claims_a_huge_image(const uint8_t* data, size_t size) {
+  constexpr uint64_t kMaxPixels = uint64_t(1) << 22;
+  auto be16 = [&](size_t at) { return uint64_t(data[at]) << 8 | data[at + 1]; };
+  auto be32 = [&](size_t at) { return be16(at) << 16 | be16(at + 2); };
+  for (size_t i = 0; i + 12 <= size; ++i) {
+    if (std::equal(data + i, data + i + 4, "IHDR") && be32(i + 4) * be32(i + 8) > kMaxPixels) return true;
+    const uint8_t m = data[i + 1];  // SOFn: FF Cn, length, precision, height, width
+    if (data[i] == 0xff && m >= 0xc0 && m <= 0xcf && m != 0xc4 && m != 0xc8 && m != 0xcc &&
+        be16(i + 5) * be16(i + 7) > kMaxPixels)
+      return true;
+  }
+  return false;
 }
 
 // Runs one reader call; a u3d::Error is a clean rejection.

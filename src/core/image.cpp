@@ -1,7 +1,6 @@
 #include "core/image.h"
 
 #include <cmath>
-#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <opencv2/imgcodecs.hpp>
@@ -33,53 +32,15 @@ Image from_mat_float(const cv::Mat& m) {
 
 }  // namespace
 
-bool is_dicom_signature(const unsigned char* bytes, size_t size) {
-  return size >= 132 && std::memcmp(bytes + 128, "DICM", 4) == 0;
-}
-
 Image load_image(const fs::path& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw Error("image not found: " + path.string());
   // A folder, and a device or pipe, which would block (/dev/stdin) or never end (/dev/zero).
   if (!fs::is_regular_file(path, ec)) throw Error("expected an image file, got a folder or device: " + path.string());
-  {
-    unsigned char head[132] = {};
-    std::ifstream in(path, std::ios::binary);
-    in.read(reinterpret_cast<char*>(head), sizeof(head));
-    if (is_dicom_signature(head, size_t(in.gcount())))
-      throw Error("cannot decode image " + path.string() + ": a DICOM file, not a PNG/JPEG image");
-    const bool png = is_png_signature(head, size_t(in.gcount())), jpeg = is_jpeg_signature(head, size_t(in.gcount()));
-    if (png || jpeg) {
-      in.clear();  // a file shorter than the head read ended the stream
-      in.seekg(0);
-      const std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-      const std::string what = "image " + path.string();
-      return png ? decode_png(bytes.data(), bytes.size(), what) : decode_jpeg(bytes.data(), bytes.size(), what);
-    }
-  }
-  cv::Mat m;
-  try {
-    m = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
-  } catch (const cv::Exception& e) {
-    // OpenCV's own text names its source file and assertion; say what it means for the user.
-    if (e.func == "validateInputImageSize")
-      throw Error("cannot decode image " + path.string() + ": larger than the 2^30 pixels an image may have");
-    throw Error("cannot decode image " + path.string() + ": " + (e.err.empty() ? std::string(e.what()) : e.err));
-  }
-  if (m.empty()) throw Error("cannot decode image " + path.string() + " (corrupt or not an image file)");
-  double scale = 1.0;
-  switch (m.depth()) {
-    case CV_8U: scale = 1.0 / 255.0; break;
-    case CV_16U: scale = 1.0 / 65535.0; break;
-    case CV_32F: scale = 1.0; break;
-    default: throw Error("unsupported pixel depth in " + path.string() + " (use 8- or 16-bit PNG/JPEG)");
-  }
-  cv::Mat f;
-  m.convertTo(f, CV_32F, scale);
-  if (f.channels() == 3) cv::cvtColor(f, f, cv::COLOR_BGR2RGB);
-  else if (f.channels() == 4) cv::cvtColor(f, f, cv::COLOR_BGRA2RGBA);
-  else if (f.channels() != 1) throw Error("unsupported channel count " + std::to_string(f.channels()) + " in " + path.string());
-  return from_mat_float(f);
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error("cannot read image " + path.string());
+  const std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return decode_image(bytes.data(), bytes.size(), "image " + path.string());
 }
 
 Image load_image_rgba(const fs::path& path) {

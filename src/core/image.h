@@ -25,14 +25,10 @@ struct Image {
   const float* pixel(int x, int y) const { return data.data() + (size_t(y) * width + x) * channels; }
 };
 
-// Loads PNG/JPEG/... (8 or 16 bit, gray/RGB/RGBA) to floats in [0, 1], RGB(A) order, alpha kept.
-// Throws Error naming the file if it is missing, unreadable or not an image.
+// Loads a PNG or JPEG file (8 or 16 bit, gray/RGB/RGBA; core/image_decode.h) to floats in [0, 1],
+// RGB(A) order, alpha kept. Throws Error naming the file if it is missing, unreadable or not a PNG or
+// JPEG image (other formats are refused by their content, whatever the file is called).
 Image load_image(const std::filesystem::path& path);
-
-// True when OpenCV would hand these bytes (the start of a file) to its DICOM decoder: GDCM asserts on
-// corrupt input and aborts the whole process, so load_image and decode_image refuse DICOM (the signature
-// "DICM" at byte 128) with an Error instead. No texture or view is a medical scan.
-bool is_dicom_signature(const unsigned char* bytes, size_t size);
 
 // Same, always 4 channels: gray is replicated, missing alpha becomes 1.
 Image load_image_rgba(const std::filesystem::path& path);

@@ -224,4 +224,10 @@ Image decode_jpeg(const unsigned char* bytes, size_t size, const std::string& wh
   return image;
 }
 
+Image decode_image(const unsigned char* bytes, size_t size, const std::string& what) {
+  if (is_png_signature(bytes, size)) return decode_png(bytes, size, what);
+  if (is_jpeg_signature(bytes, size)) return decode_jpeg(bytes, size, what);
+  throw Error("cannot decode " + what + (size == 0 ? ": no data" : ": not a PNG or JPEG image"));
+}
+
 }  // namespace u3d

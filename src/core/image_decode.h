@@ -3,9 +3,11 @@
 // OpenCV's decoders leave the libraries' default handlers in place, which print lines of their own on
 // stderr ("libpng warning: iCCP: known incorrect sRGB profile", "Corrupt JPEG data: premature end of
 // data segment"); here a library error becomes the Error's reason and a warning a "warning:" progress
-// line naming the image (core/progress.h). load_image and decode_image read PNG and JPEG with these and
-// leave other formats to OpenCV. The pixels are OpenCV's: the same library settings, the same channel
-// counts as its IMREAD_UNCHANGED, scaled to [0, 1] as load_image scales OpenCV's images, in RGB(A) order.
+// line naming the image (core/progress.h). PNG and JPEG are the only image formats read: anything else is
+// refused by its content, which also keeps the other decoders OpenCV carries (GDAL, OpenJPEG, GDCM, with
+// their own stderr lines and, for GDCM, aborts on corrupt input) away from user files. The pixels are
+// what OpenCV's IMREAD_UNCHANGED gave before: the same library settings and channel counts, scaled to
+// [0, 1] as load_image scaled OpenCV's images, in RGB(A) order.
 #include <cstddef>
 #include <string>
 
@@ -28,5 +30,9 @@ Image decode_png(const unsigned char* bytes, size_t size, const std::string& wha
 // Decodes JPEG bytes: gray stays 1 channel, colour (YCbCr, RGB, CMYK, YCCK) becomes RGB. A file that
 // ends early decodes with a warning, as libjpeg fills the rest in. Images over 2^30 pixels are refused.
 Image decode_jpeg(const unsigned char* bytes, size_t size, const std::string& what);
+
+// Decodes PNG or JPEG bytes, told apart by their signature (load_image for files, the glTF reader for
+// embedded textures). Anything else is an Error "cannot decode <what>: not a PNG or JPEG image".
+Image decode_image(const unsigned char* bytes, size_t size, const std::string& what);
 
 }  // namespace u3d

@@ -5,38 +5,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
-#include "core/image_decode.h"
 
 namespace u3d {
-
-Image decode_image(const unsigned char* bytes, size_t size, const std::string& what) {
-  require(size > 0, "cannot decode " + what + ": no image data");
-  require(!is_dicom_signature(bytes, size), "cannot decode " + what + ": DICOM data, not a PNG/JPEG image");
-  if (is_png_signature(bytes, size)) return decode_png(bytes, size, what);
-  if (is_jpeg_signature(bytes, size)) return decode_jpeg(bytes, size, what);
-  cv::Mat encoded(1, int(size), CV_8U, const_cast<unsigned char*>(bytes));
-  cv::Mat m;
-  try {
-    m = cv::imdecode(encoded, cv::IMREAD_UNCHANGED);
-  } catch (const cv::Exception& e) {
-    throw Error("cannot decode " + what + ": " + e.what());
-  }
-  require(!m.empty(), "cannot decode " + what + " (corrupt or not a PNG/JPEG image)");
-  double scale = 0;
-  switch (m.depth()) {
-    case CV_8U: scale = 1.0 / 255.0; break;
-    case CV_16U: scale = 1.0 / 65535.0; break;
-    default: throw Error("unsupported pixel depth in " + what + " (use 8- or 16-bit PNG/JPEG)");
-  }
-  cv::Mat f;
-  m.convertTo(f, CV_32F, scale);
-  if (f.channels() == 3) cv::cvtColor(f, f, cv::COLOR_BGR2RGB);
-  else if (f.channels() == 4) cv::cvtColor(f, f, cv::COLOR_BGRA2RGBA);
-  else require(f.channels() == 1, "unsupported channel count " + std::to_string(f.channels()) + " in " + what);
-  Image image(f.cols, f.rows, f.channels());
-  f.copyTo(cv::Mat(f.rows, f.cols, CV_32FC(f.channels()), image.data.data()));
-  return image;
-}
 
 TextureFormat parse_texture_format(const std::string& text) {
   if (text == "png") return TextureFormat::Png;

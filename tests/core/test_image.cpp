@@ -101,8 +101,8 @@ TEST(Image, DevicesAndFoldersAreRefusedBeforeReading) {
   }
 }
 
-// 128 bytes, "DICM", one more: OpenCV hands that to GDCM, whose assertion aborted the process (found by
-// fuzz_image). It must be an Error like any other file that is not an image.
+// 128 bytes, "DICM", one more: OpenCV handed that to GDCM, whose assertion aborted the process (found by
+// fuzz_image). It must be an Error like any other file that is not a PNG or JPEG image.
 TEST(Image, DicomSignatureIsAnErrorNotAnAbort) {
   const fs::path path = temp_dir() / "scan.png";
   {
@@ -113,12 +113,12 @@ TEST(Image, DicomSignatureIsAnErrorNotAnAbort) {
     load_image(path);
     FAIL() << "accepted";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("scan.png: a DICOM file"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("scan.png: not a PNG or JPEG image"), std::string::npos) << e.what();
   }
 }
 
-// A PNG whose header claims 65535 x 65535 pixels: OpenCV refuses it with its raw assertion text,
-// which must not reach the user.
+// A PNG whose header claims 65535 x 65535 pixels is refused in plain words (OpenCV's decoder, used
+// before, refused it with its raw assertion text).
 TEST(Image, OversizedPngIsAnErrorInPlainWords) {
   const fs::path path = temp_dir() / "huge.png";
   write_png_chunks(path, 65535, 65535);

@@ -116,6 +116,17 @@ TEST_F(OnnxReader, TypedFieldsAndNodes) {
   EXPECT_TRUE(torch::equal(g.initializers.at("shape"), torch::tensor({1, 2, 300}, torch::kLong)));
 }
 
+// An empty packed data field (found by fuzz_onnx: appending its zero values copied to the null data() of
+// an empty vector, undefined behaviour that UBSan reports) adds nothing; the tensor is empty.
+TEST_F(OnnxReader, EmptyPackedDataIsAnEmptyTensor) {
+  Proto graph;
+  graph.message(1, conv_node("c", {"x", "w"}));
+  graph.message(5, Proto().varint(1, 0).varint(2, 1).bytes(4, "").bytes(8, "w"));
+  const OnnxGraph g = load_onnx(write("empty_data.onnx", graph));
+  EXPECT_EQ(g.initializers.at("w").numel(), 0);
+  EXPECT_EQ(g.initializers.at("w").sizes(), (std::vector<int64_t>{0}));
+}
+
 TEST_F(OnnxReader, DamagedTensorsNameTheFileAndTensor) {
   Proto short_raw;
   short_raw.message(1, conv_node("c", {"x", "w"}));

@@ -264,6 +264,20 @@ TEST_F(PthTest, ArchivesOutsideTorchSaveLayoutAreRefusedBeforeLibtorchOpensThem)
                {"local.pth", "local/data/1 does not match its local header"});
   expect_error(edited("unversioned", "unversioned/version", "unversioned/vers1on", {}),
                {"unversioned.pth", "without a version record"});
+
+  // A stored record whose directory entry claims 2 GB (found by fuzz_pth: libtorch allocated the claimed
+  // size before reading): stored data is as long as its compressed size.
+  const fs::path huge = write_pth("huge", p.finish(), records);
+  std::string bytes;
+  {
+    std::ifstream in(huge, std::ios::binary);
+    bytes.assign((std::istreambuf_iterator<char>(in)), {});
+  }
+  const size_t entry = bytes.rfind("huge/data/1") - 46;  // its central-directory entry
+  ASSERT_EQ(bytes.compare(entry, 4, std::string("PK\x01\x02", 4)), 0);
+  for (int i = 0; i < 4; ++i) bytes[entry + 24 + size_t(i)] = char(i == 3 ? 0x7f : 0xff);  // uncompressed size
+  std::ofstream(huge, std::ios::binary | std::ios::trunc).write(bytes.data(), std::streamsize(bytes.size()));
+  expect_error(huge, {"huge.pth", "huge/data/1 claims 2147483647 bytes from 16"});
 }
 
 TEST_F(PthTest, TruncatedArchiveNamesTheFile) {

@@ -123,6 +123,7 @@ void append_fixed(const Field& f, std::vector<T>& out, const std::string& where)
   }
   require(f.bytes.size() % sizeof(T) == 0, where + ": truncated typed data");
   const size_t n = f.bytes.size() / sizeof(T);
+  if (n == 0) return;  // (memcpy to an empty vector's null data() is undefined even for 0 bytes)
   const size_t old = out.size();
   out.resize(old + n);
   std::memcpy(out.data() + old, f.bytes.data(), f.bytes.size());

@@ -4,6 +4,7 @@
 
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <map>
 #include <optional>
 
@@ -105,6 +106,8 @@ class StateDictHooks : public pickle::PickleHooks {
     storage->dtype = *dtype;
     storage->numel = as_int(t[4], source_ + ": storage size");
     require(storage->numel >= 0, source_ + ": negative storage size");
+    require(storage->numel <= std::numeric_limits<int64_t>::max() / 16, source_ + ": storage size " +
+                                                                             std::to_string(storage->numel) + " is too large");
     return std::shared_ptr<const pickle::Object>(storage);
   }
 
@@ -184,10 +187,12 @@ class StorageCache {
     if (it != cache_.end()) return it->second;
     const std::string record = storage_record(ref);
     require(reader_.has(record), source_ + ": tensor '" + tensor_name + "': missing record " + record);
-    auto [data, nbytes] = reader_.read(record, "tensor '" + tensor_name + "'");
     const size_t expected = storage_bytes(ref);
-    require(nbytes == expected, source_ + ": tensor '" + tensor_name + "': record " + record + " holds " +
-                                    std::to_string(nbytes) + " bytes, its storage needs " + std::to_string(expected));
+    const std::optional<uint64_t> listed = reader_.record_size(record);
+    require(listed == expected, source_ + ": tensor '" + tensor_name + "': record " + record + " holds " +
+                                    std::to_string(listed.value_or(0)) + " bytes, its storage needs " +
+                                    std::to_string(expected));
+    auto [data, nbytes] = reader_.read(record, "tensor '" + tensor_name + "'");
     c10::Storage storage(c10::Storage::use_byte_size_t(), nbytes, std::move(data), nullptr, false);
     cache_.emplace(ref.key, storage);
     return storage;
@@ -206,8 +211,14 @@ void check_view(const TensorRef& ref, const std::string& source, const std::stri
   bool empty = false;
   for (size_t d = 0; d < ref.sizes.size(); ++d) {
     require(ref.sizes[d] >= 0 && ref.strides[d] >= 0, where + ": negative size or stride");
-    if (ref.sizes[d] == 0) empty = true;
-    else last += (ref.sizes[d] - 1) * ref.strides[d];
+    if (ref.sizes[d] == 0) {
+      empty = true;
+      continue;
+    }
+    int64_t reach = 0;
+    require(!__builtin_mul_overflow(ref.sizes[d] - 1, ref.strides[d], &reach) &&
+                !__builtin_add_overflow(last, reach, &last),
+            where + ": size and stride reach beyond any storage");
   }
   require(ref.offset >= 0 && (empty || last < ref.storage->numel),
           where + ": view (offset " + std::to_string(ref.offset) + ") reaches past its storage of " +

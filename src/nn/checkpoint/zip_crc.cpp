@@ -87,6 +87,12 @@ std::map<std::string, ZipRecord> zip_records(const std::filesystem::path& path) 
     }
     if (offset > dir_offset || compressed > dir_offset - offset)
       throw bad("entry " + name + " lies outside the file (truncated download?)");
+    // The size libtorch allocates before reading: stored (torch.save's way) or deflated data cannot hold
+    // more than this, so a larger claim is corrupt and would only allocate memory for nothing.
+    const uint64_t method = le(dir, pos + 10, 2);
+    if (method != 0 && method != 8) throw bad("entry " + name + " uses compression method " + std::to_string(method));
+    if (method == 0 ? size != compressed : size / 1032 > compressed)
+      throw bad("entry " + name + " claims " + std::to_string(size) + " bytes from " + std::to_string(compressed));
     // The entry's local header, in front of its data, must be there and name the same entry.
     if (dir_offset - offset - compressed < 30) throw bad("entry " + name + " has no room for its local header");
     const std::string local = read_at(in, offset, 30, source);
