@@ -39,6 +39,14 @@ Image load_image(const fs::path& path) {
   if (!fs::is_regular_file(path, ec)) throw Error("expected an image file, got a folder or device: " + path.string());
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error("cannot read image " + path.string());
+  // The signature first, so that a large file of another kind is refused without being read.
+  unsigned char head[8] = {};
+  in.read(reinterpret_cast<char*>(head), sizeof(head));
+  const size_t head_size = size_t(in.gcount());
+  if (!is_png_signature(head, head_size) && !is_jpeg_signature(head, head_size))
+    return decode_image(head, head_size, "image " + path.string());  // (refuses it, naming the file)
+  in.clear();
+  in.seekg(0);
   const std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   return decode_image(bytes.data(), bytes.size(), "image " + path.string());
 }

@@ -1,9 +1,9 @@
 #include "core/image_decode.h"
 
-#include <png.h>
-// jpeglib.h needs size_t and FILE declared before it.
+#include <cstdio>  // before jpeglib.h, which needs size_t and FILE declared
+
 #include <jpeglib.h>
-#include <cstdio>
+#include <png.h>
 
 #include <bit>
 #include <csetjmp>

@@ -1,13 +1,14 @@
-// The PNG decoder (core/image_decode.h) that load_image and decode_image use: the same pixels as OpenCV's
-// decoder for every colour type, bit depth, transparency chunk and interlacing, and libpng's errors and
-// warnings in the project's words instead of libpng's own stderr lines.
+// The PNG and JPEG decoders (core/image_decode.h) that load_image and decode_image use: the same pixels as
+// OpenCV's decoders (for PNG every colour type, bit depth, transparency chunk and interlacing; for JPEG
+// gray, colour, progressive, 4:4:4 and CMYK), and the libraries' errors and warnings in the project's
+// words instead of their own stderr lines.
 #include <gtest/gtest.h>
 
 #include <unistd.h>
 
-// jpeglib.h needs size_t and FILE declared before it.
+#include <cstdio>  // before jpeglib.h, which needs size_t and FILE declared
+
 #include <jpeglib.h>
-#include <cstdio>
 
 #include <cstdint>
 #include <cstdlib>
