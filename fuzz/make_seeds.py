@@ -42,6 +42,29 @@ for color_type, depth in [(0, 8), (0, 16), (2, 8), (2, 16), (3, 8), (4, 8), (6, 
         rows = [bytes([0, 5, 15]), bytes([1, 2, 3])]
     put("image", f"png_ct{color_type}_{depth}bit.png", png(w, h, color_type, depth, rows, pal))
 
+# ---- JPEG: baseline files whose every 8x8 block is flat (DC difference 0, then end-of-block), with one-code
+# Huffman tables, so they can be written by hand: gray, and colour at 4:2:0 and 4:4:4
+def jpeg(width, height, components, h_sampling):
+    def segment(marker, body):
+        return bytes([0xFF, marker]) + struct.pack(">H", len(body) + 2) + body
+    out = b"\xff\xd8" + segment(0xDB, b"\x00" + bytes([1] * 64))  # one quantisation table of ones
+    comps = [(1, h_sampling)] + [(2, 1), (3, 1)][: components - 1]
+    out += segment(0xC0, struct.pack(">BHHB", 8, height, width, components) +
+                   b"".join(bytes([cid, (hv << 4) | hv, 0]) for cid, hv in comps))
+    one_code = bytes([1] + [0] * 15) + b"\x00"  # a single symbol, 0, with the one-bit code "0"
+    out += segment(0xC4, b"\x00" + one_code) + segment(0xC4, b"\x10" + one_code)  # DC table 0, AC table 0
+    out += segment(0xDA, bytes([components]) + b"".join(bytes([cid, 0x00]) for cid, _ in comps) + b"\x00\x3f\x00")
+    mcu = 8 * h_sampling
+    blocks = ((width + mcu - 1) // mcu) * ((height + mcu - 1) // mcu) * (h_sampling * h_sampling + components - 1)
+    bits = "00" * blocks
+    bits += "1" * (-len(bits) % 8)
+    return out + bytes(int(bits[i:i + 8], 2) for i in range(0, len(bits), 8)) + b"\xff\xd9"
+
+
+put("image", "jpeg_gray.jpg", jpeg(13, 9, 1, 1))
+put("image", "jpeg_colour_420.jpg", jpeg(21, 17, 3, 2))
+put("image", "jpeg_colour_444.jpg", jpeg(8, 8, 3, 1))
+
 # ---- OBJ: colours, UV seams, negative indices, a quad, both companion materials
 put("obj", "materials.obj",
     "# spot-like\nmtllib m.mtl\no thing\n"

@@ -56,8 +56,10 @@ seeds_from() {
   done
   true
 }
-seeds_from image examples/spot/spot_texture.png examples/spot/views/front_rgb.png examples/spot/views/front_normal.png \
-  tests/data/nn/clip_vision/test_image_64x48.png tests/data/objects/avocado/avocado_tex0.jpg
+# (Images over 512 x 512 pixels are skipped by the image harnesses, fuzz_common.h, so the larger textures
+# of the fixtures are no seeds.)
+seeds_from image examples/spot/views/front_rgb.png examples/spot/views/front_normal.png \
+  tests/data/nn/clip_vision/test_image_64x48.png
 seeds_from obj examples/spot/spot.obj tests/data/objects/avocado/avocado.obj
 seeds_from mtl examples/spot/spot.mtl tests/data/objects/avocado/avocado.mtl
 seeds_from ply
