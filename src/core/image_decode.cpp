@@ -19,6 +19,15 @@ static_assert(std::endian::native == std::endian::little, "16-bit samples are by
 
 namespace {
 
+// 8-bit samples to [0, 1] as load_image scaled OpenCV's images: the sample times this float.
+constexpr float k8BitScale = float(1.0 / 255.0);
+
+// A decoder's warnings as progress lines naming the image, then its error, if it failed, as the Error.
+void report(bool ok, const std::vector<std::string>& warnings, const std::string& error, const std::string& what) {
+  for (const std::string& warning : warnings) progress("warning: " + what + ": " + warning);
+  if (!ok) throw Error("cannot decode " + what + ": " + error);
+}
+
 // Everything the libpng callbacks touch, and everything that must survive a longjmp back to the
 // setjmp in decode_png: libpng's error path jumps over the frames between, so no C++ object may live
 // in them, and locals modified after setjmp would be indeterminate after the jump.
@@ -113,18 +122,18 @@ Image decode_png(const unsigned char* bytes, size_t size, const std::string& wha
   require(read.png && read.info, "cannot decode " + what + ": out of memory");
   int width = 0, height = 0, channels = 0, depth = 0;
   const bool ok = read_pixels(read, width, height, channels, depth);
-  for (const std::string& warning : read.warnings) progress("warning: " + what + ": " + warning);
-  if (!ok) throw Error("cannot decode " + what + ": " + read.error);
+  report(ok, read.warnings, read.error, what);
 
   Image image(width, height, channels);
   if (depth == 16) {
-    std::vector<uint16_t> samples(image.data.size());
-    std::memcpy(samples.data(), read.pixels.data(), samples.size() * 2);
-    const float scale = float(1.0 / 65535.0);  // as load_image scales OpenCV's 16-bit images
-    for (size_t i = 0; i < samples.size(); ++i) image.data[i] = float(samples[i]) * scale;
+    const float scale = float(1.0 / 65535.0);  // as load_image scaled OpenCV's 16-bit images
+    for (size_t i = 0; i < image.data.size(); ++i) {
+      uint16_t sample;
+      std::memcpy(&sample, read.pixels.data() + 2 * i, 2);
+      image.data[i] = float(sample) * scale;
+    }
   } else {
-    const float scale = float(1.0 / 255.0);
-    for (size_t i = 0; i < image.data.size(); ++i) image.data[i] = float(read.pixels[i]) * scale;
+    for (size_t i = 0; i < image.data.size(); ++i) image.data[i] = float(read.pixels[i]) * k8BitScale;
   }
   return image;
 }
@@ -205,21 +214,19 @@ Image decode_jpeg(const unsigned char* bytes, size_t size, const std::string& wh
   JpegRead read;
   int width = 0, height = 0, channels = 0;
   const bool ok = read_jpeg_pixels(read, bytes, size, width, height, channels);
-  for (const std::string& warning : read.warnings) progress("warning: " + what + ": " + warning);
-  if (!ok) throw Error("cannot decode " + what + ": " + read.error);
+  report(ok, read.warnings, read.error, what);
   require(channels == 1 || channels == 3 || channels == 4,
           "cannot decode " + what + ": " + std::to_string(channels) + " colour components");
-  const float scale = float(1.0 / 255.0);
   Image image(width, height, channels == 1 ? 1 : 3);
   if (channels != 4) {
-    for (size_t i = 0; i < image.data.size(); ++i) image.data[i] = float(read.pixels[i]) * scale;
+    for (size_t i = 0; i < image.data.size(); ++i) image.data[i] = float(read.pixels[i]) * k8BitScale;
     return image;
   }
   // Inverted CMYK (what Adobe writes and libjpeg hands out), converted to RGB as OpenCV converts it.
   for (size_t p = 0; p < image.pixel_count(); ++p) {
     const unsigned char* cmyk = read.pixels.data() + p * 4;
     const int k = cmyk[3];
-    for (int c = 0; c < 3; ++c) image.data[p * 3 + c] = float(k - ((255 - cmyk[c]) * k >> 8)) * scale;
+    for (int c = 0; c < 3; ++c) image.data[p * 3 + c] = float(k - ((255 - cmyk[c]) * k >> 8)) * k8BitScale;
   }
   return image;
 }
