@@ -1,6 +1,7 @@
 #include "nn/models/unet.h"
 
 #include <algorithm>
+#include <utility>
 
 #include "core/error.h"
 #include "nn/checkpoint/config_json.h"
@@ -195,8 +196,11 @@ torch::Tensor UNetUpBlockImpl::forward(torch::Tensor h, const torch::Tensor& tem
                                        const torch::Tensor& encoder_hidden_states, std::vector<torch::Tensor>& skips) {
   for (size_t i = 0; i < resnets.size(); ++i) {
     TORCH_CHECK(!skips.empty(), "UNet up block ran out of skip connections");
-    h = resnets[i]->forward(torch::cat({h, skips.back()}, 1), temb);
+    // The hidden state and the skip are freed before the resnet runs: only their concatenation is kept.
+    const torch::Tensor joined = torch::cat({h, skips.back()}, 1);
     skips.pop_back();
+    h.reset();
+    h = resnets[i]->forward(joined, temb);
     if (!attentions.empty()) h = attentions[i]->forward(h, encoder_hidden_states);
   }
   if (upsampler) {
@@ -233,7 +237,7 @@ UNet2DConditionModelImpl::UNet2DConditionModelImpl(const UNetConfig& c, const to
 }
 
 torch::Tensor UNet2DConditionModelImpl::forward(const torch::Tensor& sample, const torch::Tensor& timestep,
-                                                const torch::Tensor& encoder_hidden_states, const UNetExtras& extras) {
+                                                const torch::Tensor& encoder_hidden_states, UNetExtras extras) {
   if (sample.dim() != 4) throw Error("UNet: sample must be [N, C, H, W], got " + c10::str(sample.sizes()));
   const int64_t batch = sample.size(0);
   const int64_t factor = int64_t{1} << (config.block_out_channels.size() - 1);
@@ -288,12 +292,14 @@ torch::Tensor UNet2DConditionModelImpl::forward(const torch::Tensor& sample, con
       throw Error("UNet: " + std::to_string(extras.down_block_additional_residuals.size()) +
                   " down-block residuals given, the model has " + std::to_string(skips.size()) + " skip connections");
     for (size_t i = 0; i < skips.size(); ++i) skips[i] = skips[i] + extras.down_block_additional_residuals[i].to(compute);
+    extras.down_block_additional_residuals.clear();
   }
   h = mid_block->forward(h, emb, context);
   if (extras.mid_block_additional_residual.defined()) h = h + extras.mid_block_additional_residual.to(compute);
+  extras.mid_block_additional_residual.reset();
   record("mid_block", h);
   for (size_t i = 0; i < up_blocks.size(); ++i) {
-    h = up_blocks[i]->forward(h, emb, context, skips);
+    h = up_blocks[i]->forward(std::move(h), emb, context, skips);
     record("up_blocks." + std::to_string(i), h);
   }
   h = torch::silu(conv_norm_out->forward(h));

@@ -1,6 +1,7 @@
 #include "nn/pipelines/unique3d_refine.h"
 
 #include <algorithm>
+#include <utility>
 
 #include "core/error.h"
 #include "core/memory.h"
@@ -214,11 +215,11 @@ torch::Tensor RefineModel::run(const RefineConditioning& conditioning, const Ref
     record("latents." + std::to_string(i - start), latents);
     const torch::Tensor input = scheduler->scale_model_input(guidance ? torch::cat({latents, latents}) : latents, i);
     const torch::Tensor t = scheduler->timestep(i);
-    const ControlNetOutput residuals = controlnet->forward(input, t, prompt_embeds, control, s.conditioning_scale);
+    ControlNetOutput residuals = controlnet->forward(input, t, prompt_embeds, control, s.conditioning_scale);
     UNetExtras extras;
-    extras.down_block_additional_residuals = residuals.down_block_res_samples;
-    extras.mid_block_additional_residual = residuals.mid_block_res_sample;
-    torch::Tensor prediction = unet->forward(input, t, unet_context, extras);
+    extras.down_block_additional_residuals = std::move(residuals.down_block_res_samples);
+    extras.mid_block_additional_residual = std::move(residuals.mid_block_res_sample);
+    torch::Tensor prediction = unet->forward(input, t, unet_context, std::move(extras));
     if (guidance) {
       auto halves = prediction.chunk(2);
       prediction = halves[0] + s.guidance_scale * (halves[1] - halves[0]);
