@@ -38,38 +38,56 @@ torch::Tensor multi_head_attention(const torch::Tensor& q, const torch::Tensor& 
                                    int64_t heads, double scale, int64_t score_budget) {
   TORCH_CHECK(q.dim() == 3 && k.dim() == 3 && v.dim() == 3, "attention expects [B, L, C] inputs");
   TORCH_CHECK(q.size(2) % heads == 0, "attention: ", q.size(2), " channels do not split into ", heads, " heads");
-  torch::Tensor qh = split_heads(q * scale, heads);
-  torch::Tensor kt = split_heads(k, heads).transpose(1, 2);
-  torch::Tensor vh = split_heads(v, heads);
-  const int64_t bh = qh.size(0), lq = qh.size(1), lk = kt.size(2);
-  if (bh * lq * lk <= score_budget) return merge_heads(torch::bmm(softmax_fp32(torch::bmm(qh, kt)), vh), heads);
+  const int64_t batch = q.size(0), lq = q.size(1), lk = k.size(1), dim = q.size(2) / heads;
+  if (batch * heads * lq * lk <= score_budget) {
+    const torch::Tensor scores = torch::bmm(split_heads(q * scale, heads), split_heads(k, heads).transpose(1, 2));
+    return merge_heads(torch::bmm(softmax_fp32(scores), split_heads(v, heads)), heads);
+  }
 
-  // Blocks of one head's queries whose scores stay within the budget (and so in the core's cache),
-  // spread over the threads; each block's products and softmax run single-threaded inside it.
+  // Each task takes one sample's head (or a range of its queries, where there are fewer heads than
+  // threads to keep busy), copies that head's keys and values into two small contiguous matrices, and
+  // goes through its queries in blocks of at most `score_budget` scores, single-threaded inside. A
+  // block's queries are read from q and its output rows written into the result in place: no
+  // head-split copy of q, k, v or the output is made.
+  const torch::Tensor q4 = q.reshape({batch, lq, heads, dim});
+  const torch::Tensor k4 = k.reshape({batch, lk, heads, dim});
+  const torch::Tensor v4 = v.reshape({batch, lk, heads, dim});
+  torch::Tensor out = torch::empty({batch, lq, heads * dim}, v.options());
+  const torch::Tensor out4 = out.view({batch, lq, heads, dim});
   const int64_t chunk = std::clamp<int64_t>(score_budget / std::max<int64_t>(lk, 1), 1, std::max<int64_t>(lq, 1));
   const int64_t blocks_per_head = (lq + chunk - 1) / chunk;
-  torch::Tensor out = torch::empty({bh, lq, vh.size(2)}, vh.options());
+  const int64_t wanted_tasks = 4 * static_cast<int64_t>(at::get_num_threads());
+  const int64_t parts = std::clamp<int64_t>((wanted_tasks + batch * heads - 1) / (batch * heads), 1, blocks_per_head);
+  const int64_t blocks_per_part = (blocks_per_head + parts - 1) / parts;
   const at::ThreadLocalState caller_state;  // inference mode and grad mode for the worker threads
-  at::parallel_for(0, bh * blocks_per_head, 1, [&](int64_t begin, int64_t end) {
+  at::parallel_for(0, batch * heads * parts, 1, [&](int64_t begin, int64_t end) {
     at::ThreadLocalStateGuard state_guard(caller_state);
-    for (int64_t block = begin; block < end; ++block) {
-      const int64_t head = block / blocks_per_head, start = (block % blocks_per_head) * chunk;
-      const int64_t n = std::min(chunk, lq - start);
-      torch::Tensor probs = softmax_fp32(torch::mm(qh[head].narrow(0, start, n), kt[head]));
-      torch::Tensor target = out[head].narrow(0, start, n);
-      torch::mm_out(target, probs, vh[head]);
+    for (int64_t task = begin; task < end; ++task) {
+      const int64_t sample = task / (heads * parts), head = task / parts % heads, part = task % parts;
+      const torch::Tensor keys_t = k4.select(0, sample).select(1, head).contiguous().t();
+      const torch::Tensor values = v4.select(0, sample).select(1, head).contiguous();
+      const torch::Tensor queries = q4.select(0, sample).select(1, head);
+      const torch::Tensor target = out4.select(0, sample).select(1, head);
+      for (int64_t block = part * blocks_per_part; block < std::min((part + 1) * blocks_per_part, blocks_per_head);
+           ++block) {
+        const int64_t start = block * chunk, n = std::min(chunk, lq - start);
+        const torch::Tensor scores = torch::mm(queries.narrow(0, start, n) * scale, keys_t);
+        target.narrow(0, start, n).copy_(torch::mm(softmax_fp32(scores), values));
+      }
     }
   });
-  return merge_heads(out, heads);
+  return out;
 }
 
 torch::Tensor causal_multi_head_attention(const torch::Tensor& q, const torch::Tensor& k, const torch::Tensor& v,
                                           int64_t heads, double scale) {
-  TORCH_CHECK(q.dim() == 3 && q.sizes() == k.sizes() && k.sizes() == v.sizes(), "causal attention expects equal [B, L, C] inputs");
+  TORCH_CHECK(q.dim() == 3 && q.sizes() == k.sizes() && k.sizes() == v.sizes(),
+              "causal attention expects equal [B, L, C] inputs");
   TORCH_CHECK(q.size(2) % heads == 0, "attention: ", q.size(2), " channels do not split into ", heads, " heads");
   torch::Tensor scores = torch::bmm(split_heads(q * scale, heads), split_heads(k, heads).transpose(1, 2));
   const int64_t l = q.size(1);
-  const torch::Tensor future = torch::ones({l, l}, torch::TensorOptions().dtype(torch::kBool).device(q.device())).triu(1);
+  const torch::Tensor future =
+      torch::ones({l, l}, torch::TensorOptions().dtype(torch::kBool).device(q.device())).triu(1);
   scores = scores.masked_fill(future, -std::numeric_limits<double>::infinity());
   return merge_heads(torch::bmm(softmax_fp32(scores), split_heads(v, heads)), heads);
 }
@@ -83,7 +101,8 @@ AttentionImpl::AttentionImpl(const AttentionOptions& o, const torch::TensorOptio
   const int64_t inner = o.heads * o.dim_head;
   const int64_t kv_dim = o.cross_attention_dim > 0 ? o.cross_attention_dim : o.query_dim;
   // Registration order follows diffusers so named_parameters() lists keys the same way.
-  if (o.norm_groups > 0) group_norm = register_module("group_norm", GroupNorm(o.norm_groups, o.query_dim, o.norm_eps, t));
+  if (o.norm_groups > 0)
+    group_norm = register_module("group_norm", GroupNorm(o.norm_groups, o.query_dim, o.norm_eps, t));
   to_q = register_module("to_q", Linear(o.query_dim, inner, o.qkv_bias, t));
   to_k = register_module("to_k", Linear(kv_dim, inner, o.qkv_bias, t));
   to_v = register_module("to_v", Linear(kv_dim, inner, o.qkv_bias, t));

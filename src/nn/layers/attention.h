@@ -31,10 +31,13 @@ namespace u3d::nn {
 // q [B, Lq, H*D], k and v [B, Lk, H*D] -> [B, Lq, H*D]. `scale` multiplies q before the product (same
 // math as diffusers' alpha on q·kᵀ, and it never uses baddbmm, whose beta=0 path returns NaN on CPU in
 // libtorch 1.13). The softmax computes in fp32 for fp16/bf16 inputs and returns their dtype. When all
-// B·H·Lq·Lk scores exceed `score_budget` elements, the queries of each head go in blocks of at most
-// that many scores, one block per thread at a time: long self-attention never materialises its full
-// score matrix, and a block's scores stay in the core's cache between the two products.
-constexpr int64_t kDefaultAttentionScoreBudget = int64_t{1} << 17;
+// B·H·Lq·Lk scores exceed `score_budget` elements, each head's queries go in blocks of at most that
+// many scores, one block per thread at a time, reading q, k, v and writing the output in place: long
+// self-attention never materialises its full score matrix nor a head-split copy of its inputs. The
+// default, 4 MiB of fp32 scores a thread, is 64 queries a block at 16,384 keys: blocks of 8 (2^17)
+// took 1.5x as long at the first level of a 1024 px image, since each block packs all keys again
+// (bench_attention; docs/networks.md).
+constexpr int64_t kDefaultAttentionScoreBudget = int64_t{1} << 20;
 torch::Tensor multi_head_attention(const torch::Tensor& q, const torch::Tensor& k, const torch::Tensor& v,
                                    int64_t heads, double scale,
                                    int64_t score_budget = kDefaultAttentionScoreBudget);
