@@ -32,13 +32,14 @@ TEST(Attention, ChunkedQueriesMatchDirectComputation) {
   }
 }
 
-// Sequences over 4,096 tokens go through the feed-forward in blocks; the result is the one-block formula.
-TEST(Attention, FeedForwardInTokenBlocksMatchesWholeSequence) {
+// Inputs whose GEGLU hidden layer would exceed 2^23 values go through the feed-forward in blocks of
+// rows (here 131,072 rows of 64 hidden values, over the batch boundary); the result is the one-block formula.
+TEST(Attention, FeedForwardInRowBlocksMatchesWholeInput) {
   torch::NoGradGuard no_grad;
   torch::manual_seed(5);
   FeedForward ff(8, torch::TensorOptions());
   randomize_parameters(*ff, 0.5);
-  const torch::Tensor x = torch::randn({2, 2 * 4096 + 100, 8});
+  const torch::Tensor x = torch::randn({3, 100000, 8});
   const torch::Tensor whole = ff->proj_out->forward(ff->geglu->forward(x));
   // fp32 sums in a different order for the blocks than for the whole (the kernels block by shape).
   EXPECT_LE((ff->forward(x) - whole).abs().max().item<double>(), 2e-5);

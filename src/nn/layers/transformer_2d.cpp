@@ -6,10 +6,11 @@ namespace u3d::nn {
 
 namespace {
 
-// The feed-forward is token-wise, so a long sequence goes through in blocks of this many tokens: the
-// GEGLU's hidden layer is 8 x dim wide (2 x 16,384 x 2,560 values, 335 MB in fp32, at the first level of
-// a 1024 px image) and only one block of it exists at a time.
-constexpr int64_t kFeedForwardBlockTokens = 4096;
+// The feed-forward works on each token alone, so a long input goes through in blocks of rows (batch x
+// tokens) whose GEGLU hidden layer, 8 x dim values a row, holds at most this many values (32 MiB in
+// fp32). Whole, it is 2 x 4,096 x 5,120 values (168 MB) at the second level of a 1024 px image at
+// batch 2, and the largest tensor of a refinement step.
+constexpr int64_t kFeedForwardHiddenValues = int64_t{1} << 23;
 
 }  // namespace
 
@@ -30,13 +31,17 @@ FeedForwardImpl::FeedForwardImpl(int64_t dim, const torch::TensorOptions& t) {
 }
 
 torch::Tensor FeedForwardImpl::forward(const torch::Tensor& x) {
-  if (x.dim() != 3 || x.size(1) <= kFeedForwardBlockTokens) return proj_out->forward(geglu->forward(x));
-  torch::Tensor out = torch::empty({x.size(0), x.size(1), proj_out->weight.size(0)}, x.options());
-  for (int64_t start = 0; start < x.size(1); start += kFeedForwardBlockTokens) {
-    const int64_t n = std::min(kFeedForwardBlockTokens, x.size(1) - start);
-    out.narrow(1, start, n).copy_(proj_out->forward(geglu->forward(x.narrow(1, start, n))));
+  const int64_t block = std::max<int64_t>(kFeedForwardHiddenValues / geglu->proj->weight.size(0), 1);
+  const torch::Tensor rows = x.reshape({-1, x.size(-1)});
+  if (rows.size(0) <= block) return proj_out->forward(geglu->forward(x));
+  torch::Tensor out = torch::empty({rows.size(0), proj_out->weight.size(0)}, x.options());
+  for (int64_t start = 0; start < rows.size(0); start += block) {
+    const int64_t n = std::min(block, rows.size(0) - start);
+    out.narrow(0, start, n).copy_(proj_out->forward(geglu->forward(rows.narrow(0, start, n))));
   }
-  return out;
+  std::vector<int64_t> sizes = x.sizes().vec();
+  sizes.back() = out.size(1);
+  return out.reshape(sizes);
 }
 
 BasicTransformerBlockImpl::BasicTransformerBlockImpl(int64_t dim, int64_t heads, int64_t dim_head,
@@ -56,9 +61,11 @@ BasicTransformerBlockImpl::BasicTransformerBlockImpl(int64_t dim, int64_t heads,
 }
 
 torch::Tensor BasicTransformerBlockImpl::forward(const torch::Tensor& x, const torch::Tensor& encoder_hidden_states) {
-  torch::Tensor h = x + attn1->forward(norm1->forward(x));
-  h = h + attn2->forward(norm2->forward(h), encoder_hidden_states);
-  return h + ff->forward(norm3->forward(h));
+  // The residuals are added into the fresh outputs in place (the same sums), so no third map of the
+  // block's size is allocated for them.
+  torch::Tensor h = attn1->forward(norm1->forward(x)).add_(x);
+  h.add_(attn2->forward(norm2->forward(h), encoder_hidden_states));
+  return h.add_(ff->forward(norm3->forward(h)));
 }
 
 Transformer2DModelImpl::Transformer2DModelImpl(int64_t heads, int64_t dim_head, int64_t in_channels, int64_t layers,
@@ -82,7 +89,7 @@ torch::Tensor Transformer2DModelImpl::forward(const torch::Tensor& x, const torc
   tokens = tokens.permute({0, 2, 3, 1}).reshape({b, h * w, inner});
   for (auto& block : blocks) tokens = block->forward(tokens, encoder_hidden_states);
   torch::Tensor out = tokens.reshape({b, h, w, inner}).permute({0, 3, 1, 2}).contiguous();
-  return proj_out->forward(out) + x;
+  return proj_out->forward(out).add_(x);
 }
 
 }  // namespace u3d::nn
