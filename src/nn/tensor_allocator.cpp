@@ -1,0 +1,151 @@
+#include "nn/tensor_allocator.h"
+
+#include <c10/core/Allocator.h>
+#include <c10/core/CPUAllocator.h>
+#include <c10/util/Exception.h>
+#include <sys/mman.h>
+
+#include <deque>
+#include <mutex>
+#include <unordered_map>
+#include <vector>
+
+namespace u3d::nn {
+
+namespace {
+
+constexpr size_t kGranule = size_t{64} << 10;  // mapped sizes are multiples of this
+
+struct Block {
+  void* data;
+  size_t bytes;
+};
+
+// Every block it hands out has its data pointer as its context and one deleter (`release`), as
+// libtorch's raw_allocate / raw_deallocate need (oneDNN's scratch buffers come that way); the deleter
+// tells the large blocks by their entry in `large_`.
+class TensorAllocator final : public c10::Allocator {
+ public:
+  c10::DataPtr allocate(size_t n) const override {
+    if (n < kLargeBlockBytes) {
+      void* data = c10::GetDefaultCPUAllocator()->raw_allocate(n);
+      return {data, data, &TensorAllocator::release, c10::Device(c10::DeviceType::CPU)};
+    }
+    const size_t bytes = (n + kGranule - 1) / kGranule * kGranule;
+    void* data = take_cached(bytes);
+    if (!data) {
+      data = mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+      TORCH_CHECK(data != MAP_FAILED, "tensor allocator: not enough memory: you tried to allocate ", n, " bytes");
+      std::lock_guard<std::mutex> lock(mutex_);
+      large_[data] = bytes;
+      mapped_bytes_ += bytes;
+      ++stats_.mapped_blocks;
+    }
+    report(data, static_cast<int64_t>(bytes));
+    return {data, data, &TensorAllocator::release, c10::Device(c10::DeviceType::CPU)};
+  }
+
+  c10::DeleterFnPtr raw_deleter() const override { return &TensorAllocator::release; }
+
+  TensorAllocatorStats stats() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    TensorAllocatorStats s = stats_;
+    s.mapped_bytes = mapped_bytes_;
+    s.cached_bytes = cached_bytes_;
+    return s;
+  }
+
+ private:
+  static void release(void* data);
+
+  static void report(void* data, int64_t bytes) {
+    if (c10::memoryProfilingEnabled())
+      c10::reportMemoryUsageToProfiler(data, bytes, 0, 0, c10::Device(c10::DeviceType::CPU));
+  }
+
+  // The smallest cached block of at least `bytes` and at most an eighth more, taken out of the cache.
+  void* take_cached(size_t bytes) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto best = cache_.end();
+    for (auto it = cache_.begin(); it != cache_.end(); ++it)
+      if (it->bytes >= bytes && it->bytes <= bytes + bytes / 8 && (best == cache_.end() || it->bytes < best->bytes))
+        best = it;
+    if (best == cache_.end()) return nullptr;
+    void* data = best->data;
+    cached_bytes_ -= best->bytes;
+    cache_.erase(best);
+    ++stats_.reused_blocks;
+    return data;
+  }
+
+  // Frees a block: a large one goes to the cache, and the oldest cached ones are unmapped while the
+  // cache is over its bound (a block larger than the whole cache is unmapped at once); a small one goes
+  // back to libtorch's allocator. Returns false for a pointer that is not a large block.
+  bool give_back(void* data) const {
+    std::vector<Block> unmapped;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      const auto found = large_.find(data);
+      if (found == large_.end()) return false;
+      const Block block{data, found->second};
+      if (block.bytes > kLargeBlockCacheBytes) {
+        unmapped.push_back(block);
+      } else {
+        cache_.push_back(block);
+        cached_bytes_ += block.bytes;
+        while (cached_bytes_ > kLargeBlockCacheBytes) {
+          unmapped.push_back(cache_.front());
+          cached_bytes_ -= cache_.front().bytes;
+          cache_.pop_front();
+        }
+      }
+      for (const Block& b : unmapped) {
+        large_.erase(b.data);
+        mapped_bytes_ -= b.bytes;
+      }
+    }
+    for (const Block& b : unmapped) munmap(b.data, b.bytes);
+    return true;
+  }
+
+  mutable std::mutex mutex_;
+  mutable std::unordered_map<void*, size_t> large_;  // every mapped block, in use or cached: its size
+  mutable std::deque<Block> cache_;                  // freed large blocks, oldest first
+  mutable size_t cached_bytes_ = 0, mapped_bytes_ = 0;
+  mutable TensorAllocatorStats stats_;
+};
+
+// Never destroyed: tensors may outlive every other static.
+TensorAllocator& instance() {
+  static auto* allocator = new TensorAllocator();
+  return *allocator;
+}
+
+void TensorAllocator::release(void* data) {
+  if (!data) return;
+  const TensorAllocator& self = instance();
+  size_t bytes = 0;
+  {
+    std::lock_guard<std::mutex> lock(self.mutex_);
+    const auto found = self.large_.find(data);
+    if (found != self.large_.end()) bytes = found->second;
+  }
+  if (bytes == 0) {
+    c10::GetDefaultCPUAllocator()->raw_deallocate(data);
+    return;
+  }
+  report(data, -static_cast<int64_t>(bytes));
+  self.give_back(data);
+}
+
+}  // namespace
+
+void install_tensor_allocator() {
+  static std::once_flag once;
+  // Above the default allocator's registration (priority 0).
+  std::call_once(once, [] { c10::SetCPUAllocator(&instance(), /*priority=*/1); });
+}
+
+TensorAllocatorStats tensor_allocator_stats() { return instance().stats(); }
+
+}  // namespace u3d::nn

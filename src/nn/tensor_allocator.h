@@ -1,0 +1,32 @@
+#pragma once
+// The CPU allocator libtorch's tensors come from once install_tensor_allocator() has run. Blocks of
+// kLargeBlockBytes and more (the networks' activations and most weights) get their own mappings; a
+// freed one waits in a bounded cache for the next request of the same size (a denoising step asks
+// for the same sizes in the same order every step) and is unmapped when the cache would exceed its
+// bound, so the memory the process holds beyond its live tensors stays within that bound. Smaller
+// blocks go to libtorch's own allocator (glibc's heap).
+//
+// In glibc's heap the large blocks left holes that later blocks of other sizes could not use: a fp32
+// refinement step at 1024 px held about 1 GiB more than its live tensors that way (docs/networks.md,
+// "Memory"). Mapping each of them anew instead (a lower M_MMAP_THRESHOLD) faults their pages in again
+// every time, which cost a fifth of the step's time.
+#include <cstddef>
+
+namespace u3d::nn {
+
+constexpr size_t kLargeBlockBytes = size_t{8} << 20;
+constexpr size_t kLargeBlockCacheBytes = size_t{128} << 20;
+
+// Makes this allocator libtorch's CPU allocator. Idempotent; tensors allocated before keep their own
+// deleters, so it may be called at any time. Called by configure_torch_threads (nn/runtime.h).
+void install_tensor_allocator();
+
+struct TensorAllocatorStats {
+  size_t mapped_bytes = 0;   // large blocks mapped now, in use or cached
+  size_t cached_bytes = 0;   // of which freed and waiting in the cache
+  size_t reused_blocks = 0;  // large requests served from the cache so far
+  size_t mapped_blocks = 0;  // large requests that mapped a new block so far
+};
+TensorAllocatorStats tensor_allocator_stats();
+
+}  // namespace u3d::nn
