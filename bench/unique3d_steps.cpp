@@ -11,16 +11,25 @@
 // Prints seconds per step (median of --repetitions, default 3), the resident memory before the first
 // step (the weights) and the peak RSS (of the whole process: run one step kind with --only to see its
 // own; GB here are GiB). A full run is 30 steps each for the first two, 10 for refine.
+// --memory-profile adds the peak of the tensor memory the steps allocate beyond the weights, with the
+// ATen ops open when it is reached (libtorch's memory reports and op callbacks; it slows the steps).
 // Usage: bench_unique3d_steps [--dtype=fp32|bf16] [--repetitions=N] [--only=multiview|normal|refine]
+//                             [--memory-profile]
 #include <sys/resource.h>
 #include <unistd.h>
+#include <ATen/record_function.h>
+#include <c10/core/Allocator.h>
+#include <c10/util/ThreadLocalDebugInfo.h>
 #include <torch/torch.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <functional>
+#include <memory>
+#include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/error.h"
@@ -34,6 +43,7 @@
 #include "nn/pipelines/guidance.h"
 #include "nn/precision.h"
 #include "nn/runtime.h"
+#include "nn/tensor_allocator.h"
 
 using namespace u3d::nn;
 
@@ -71,19 +81,95 @@ double peak_rss_gb() {
   return static_cast<double>(usage.ru_maxrss) / (1024.0 * 1024.0);
 }
 
+
+// --memory-profile: the peak of the tensor memory a step allocates beyond what exists before it
+// (libtorch reports every CPU allocation and free to the profiler's debug-info slot), and the ATen ops
+// open on the main thread when it is reached.
+class MemoryPeakTracker : public c10::MemoryReportingInfoBase {
+ public:
+  void reportMemoryUsage(void*, int64_t bytes, int64_t, int64_t, c10::Device) override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    live_ += bytes;
+    if (live_ > peak_) {
+      peak_ = live_;
+      peak_ops_ = ops_;
+    }
+  }
+  bool memoryProfilingEnabled() const override { return true; }
+  void push(std::string op) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ops_.push_back(std::move(op));
+  }
+  void pop() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!ops_.empty()) ops_.pop_back();
+  }
+  void print() const {
+    std::printf("tensor memory the step allocates: peak %.1f MiB, %.1f MiB still held at the end; open ops at the peak:\n",
+                peak_ / 1048576.0, live_ / 1048576.0);
+    for (const std::string& op : peak_ops_) std::printf("  %s\n", op.c_str());
+  }
+
+ private:
+  std::mutex mutex_;
+  int64_t live_ = 0, peak_ = 0;
+  std::vector<std::string> ops_, peak_ops_;
+};
+
+MemoryPeakTracker* g_tracker = nullptr;
+
+std::unique_ptr<at::ObserverContext> on_op_start(const at::RecordFunction& fn) {
+  std::string op = fn.name();
+  for (const c10::IValue& input : fn.inputs())
+    if (input.isTensor() && input.toTensor().defined()) op += " " + c10::str(input.toTensor().sizes());
+  g_tracker->push(std::move(op));
+  return nullptr;
+}
+
+void on_op_end(const at::RecordFunction&, at::ObserverContext*) { g_tracker->pop(); }
+
+// median_seconds, with --memory-profile's report of the steps' tensor memory after it.
+double timed_steps(int repetitions, bool memory_profile, const std::function<void()>& step) {
+  if (!memory_profile) return median_seconds(repetitions, step);
+  auto tracker = std::make_shared<MemoryPeakTracker>();
+  g_tracker = tracker.get();
+  const at::CallbackHandle callbacks =
+      at::addThreadLocalCallback(at::RecordFunctionCallback(on_op_start, on_op_end).needsInputs(true));
+  double seconds = 0;
+  {
+    c10::DebugInfoGuard tracking(c10::DebugInfoKind::PROFILER_STATE, tracker);
+    seconds = median_seconds(repetitions, step);
+  }
+  at::removeCallback(callbacks);
+  tracker->print();
+  g_tracker = nullptr;
+  return seconds;
+}
+
+// The large tensor blocks (nn/tensor_allocator.h) mapped anew and reused from the cache so far.
+void print_allocator_stats() {
+  const TensorAllocatorStats s = tensor_allocator_stats();
+  std::printf("  large tensor blocks so far: %zu mapped, %zu reused from the cache\n", s.mapped_blocks, s.reused_blocks);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) try {
   Precision precision = Precision::kFp32;
   int repetitions = 3;
   std::string only;
-  const std::string usage = "usage: bench_unique3d_steps [--dtype=fp32|bf16] [--repetitions=N] [--only=multiview|normal|refine]";
+  bool memory_profile = false;
+  const std::string usage =
+      "usage: bench_unique3d_steps [--dtype=fp32|bf16] [--repetitions=N] [--only=multiview|normal|refine] "
+      "[--memory-profile]";
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg.starts_with("--dtype="))
       precision = parse_precision(arg.substr(8), "--dtype");
     else if (arg.starts_with("--repetitions="))
       repetitions = std::max(1, std::stoi(arg.substr(14)));
+    else if (arg == "--memory-profile")
+      memory_profile = true;
     else if (arg == "--only=multiview" || arg == "--only=normal" || arg == "--only=refine")
       only = arg.substr(7);
     else
@@ -104,7 +190,7 @@ int main(int argc, char** argv) try {
     torch::Tensor x = torch::randn({4, 4, 32, 32}), context = torch::randn({8, 1, 768});
     torch::Tensor condition = torch::randn({2, 4, 32, 32});
     const double before = resident_gb();
-    const double s = median_seconds(repetitions, [&] {
+    const double s = timed_steps(repetitions, memory_profile, [&] {
       guided_prediction(1.5, [&](GuidanceHalf half) {
         UNetExtras extras;
         extras.class_labels = torch::arange(4, torch::kLong);
@@ -114,6 +200,7 @@ int main(int argc, char** argv) try {
     });
     std::printf("multi-view step (two halves of batch 4 at 32x32, 4 joint views)  %s: %6.2f s   resident before %.2f GB, peak RSS %.2f GB\n",
                 precision_name(precision), s, before, peak_rss_gb());
+    print_allocator_stats();
   }
   if (wanted("normal")) {
     ReferenceUNet model(manifest_config("unet_unique3d_image2normal"), options);
@@ -122,7 +209,7 @@ int main(int argc, char** argv) try {
     torch::Tensor x = torch::randn({4, 4, 64, 64}), context = torch::randn({8, 1, 768});
     torch::Tensor condition = torch::randn({8, 4, 64, 64});
     const double before = resident_gb();
-    const double s = median_seconds(repetitions, [&] {
+    const double s = timed_steps(repetitions, memory_profile, [&] {
       guided_prediction(1.5, [&](GuidanceHalf half) {
         return model.forward(x, torch::tensor(500.0f), batch_half(context, half), batch_half(condition, half));
       });
@@ -130,6 +217,7 @@ int main(int argc, char** argv) try {
     std::printf("normal step (4 views: reference + main, two halves of batch 4 at 64x64) %s: %6.2f s (%.2f s a view)"
                 "   resident before %.2f GB, peak RSS %.2f GB\n",
                 precision_name(precision), s, s / 4, before, peak_rss_gb());
+    print_allocator_stats();
   }
   if (wanted("refine")) {
     // SD 1.5's UNet has the sd-image-variations architecture (cross-attention dim 768).
@@ -147,15 +235,16 @@ int main(int argc, char** argv) try {
     torch::Tensor context = adapter->context(text, torch::randn({2, 1024}));
     torch::Tensor control = torch::rand({2, 3, 1024, 1024});
     const double before = resident_gb();
-    const double s = median_seconds(repetitions, [&] {
+    const double s = timed_steps(repetitions, memory_profile, [&] {
       ControlNetOutput residuals = controlnet->forward(x, torch::tensor(500.0f), text, control);
       UNetExtras extras;
-      extras.down_block_additional_residuals = residuals.down_block_res_samples;
-      extras.mid_block_additional_residual = residuals.mid_block_res_sample;
-      unet->forward(x, torch::tensor(500.0f), context, extras);
+      extras.down_block_additional_residuals = std::move(residuals.down_block_res_samples);
+      extras.mid_block_additional_residual = std::move(residuals.mid_block_res_sample);
+      unet->forward(x, torch::tensor(500.0f), context, std::move(extras));
     });
     std::printf("refine step (ControlNet + UNet with IP-Adapter, batch 2 at 128x128) %s: %6.2f s   resident before %.2f GB, peak RSS %.2f GB\n",
                 precision_name(precision), s, before, peak_rss_gb());
+    print_allocator_stats();
   }
   return 0;
 } catch (const std::exception& e) {
