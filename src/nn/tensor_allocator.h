@@ -9,7 +9,7 @@
 // In glibc's heap the large blocks left holes that later blocks of other sizes could not use: a fp32
 // refinement step at 1024 px held about 1 GiB more than its live tensors that way (docs/networks.md,
 // "Memory"). Mapping each of them anew instead (a lower M_MMAP_THRESHOLD) faults their pages in again
-// every time, which cost a fifth of the step's time.
+// every time: the same step took 180 s against 149 s in one run each.
 #include <cstddef>
 
 namespace u3d::nn {
