@@ -1,8 +1,8 @@
 // multi_head_attention at the long sequences of the Unique3D networks, random inputs, every core:
 // the first level of a refinement step (batch 2, 16,384 tokens, 8 heads of 40 channels) and of a
 // normal-map step (batch 4, 4,096 tokens). Prints the median seconds of --repetitions (default 3)
-// calls per case.
-// Usage: bench_attention [--repetitions=N] [--dtype=fp32|bf16]
+// calls per case. --score-budget=N replaces multi_head_attention's default (kDefaultAttentionScoreBudget).
+// Usage: bench_attention [--repetitions=N] [--dtype=fp32|bf16] [--score-budget=N]
 #include <torch/torch.h>
 
 #include <algorithm>
@@ -31,7 +31,8 @@ int main(int argc, char** argv) try {
     else if (arg.starts_with("--dtype="))
       precision = parse_precision(arg.substr(8), "--dtype");
     else
-      throw u3d::Error("unknown argument '" + arg + "' (usage: bench_attention [--repetitions=N] [--dtype=fp32|bf16])");
+      throw u3d::Error("unknown argument '" + arg +
+                       "' (usage: bench_attention [--repetitions=N] [--dtype=fp32|bf16] [--score-budget=N])");
   }
   configure_torch_threads();
   c10::InferenceMode inference;
