@@ -78,16 +78,18 @@ class TensorAllocator final : public c10::Allocator {
     return data;
   }
 
-  // Frees a block: a large one goes to the cache, and the oldest cached ones are unmapped while the
-  // cache is over its bound (a block larger than the whole cache is unmapped at once); a small one goes
-  // back to libtorch's allocator. Returns false for a pointer that is not a large block.
-  bool give_back(void* data) const {
+  // Frees a large block: it goes to the cache, and the oldest cached ones are unmapped while the cache
+  // is over its bound (a block larger than the whole cache is unmapped at once). Returns its size, or 0
+  // (doing nothing) for a pointer that is not a large block.
+  size_t give_back(void* data) const {
     std::vector<Block> unmapped;
+    size_t bytes = 0;
     {
       std::lock_guard<std::mutex> lock(mutex_);
       const auto found = large_.find(data);
-      if (found == large_.end()) return false;
-      const Block block{data, found->second};
+      if (found == large_.end()) return 0;
+      bytes = found->second;
+      const Block block{data, bytes};
       if (block.bytes > kLargeBlockCacheBytes) {
         unmapped.push_back(block);
       } else {
@@ -105,7 +107,7 @@ class TensorAllocator final : public c10::Allocator {
       }
     }
     for (const Block& b : unmapped) munmap(b.data, b.bytes);
-    return true;
+    return bytes;
   }
 
   mutable std::mutex mutex_;
@@ -123,19 +125,10 @@ TensorAllocator& instance() {
 
 void TensorAllocator::release(void* data) {
   if (!data) return;
-  const TensorAllocator& self = instance();
-  size_t bytes = 0;
-  {
-    std::lock_guard<std::mutex> lock(self.mutex_);
-    const auto found = self.large_.find(data);
-    if (found != self.large_.end()) bytes = found->second;
-  }
-  if (bytes == 0) {
+  if (const size_t bytes = instance().give_back(data))
+    report(data, -static_cast<int64_t>(bytes));
+  else
     c10::GetDefaultCPUAllocator()->raw_deallocate(data);
-    return;
-  }
-  report(data, -static_cast<int64_t>(bytes));
-  self.give_back(data);
 }
 
 }  // namespace
