@@ -96,20 +96,29 @@ ViewSetImages run_normal_stage(const std::array<Image, 4>& views, const NetworkO
                                const NormalOptions& options, NetworkStageSummary& summary) {
   const ModelFolder folder(network.models);
   summary.precision = resolve_precision(network);
-  StageTimer load_timer("loading the normal model");
-  auto model = nn::NormalModel::load(folder.image_variations_for_normals(), folder.image2normal(), summary.precision);
-  summary.timings.push_back({"load normal model", load_timer.finish()});
-
-  StageTimer timer("normal prediction");
-  std::vector<torch::Tensor> inputs;
-  for (const Image& view : views) inputs.push_back(model_input(view, options.size));
+  // The views are encoded before the UNets are read, so the CLIP encoder is freed by then
+  // (nn/pipelines/unique3d_normal.h).
+  StageTimer load_timer("loading the normal model's encoders");
+  auto model = nn::NormalModel::load_conditioning(folder.image_variations_for_normals(), folder.image2normal(),
+                                                  summary.precision);
+  summary.timings.push_back({"load encoders", load_timer.finish()});
   nn::NormalSettings settings;
   settings.size = options.size;
   settings.steps = options.steps;
   settings.guidance_scale = options.guidance_scale;
   settings.free_networks_as_done = true;
+  StageTimer encode_timer("encoding the views");
+  std::vector<torch::Tensor> inputs;
+  for (const Image& view : views) inputs.push_back(model_input(view, options.size));
+  const nn::ImageConditions conditions = model->encode(inputs, settings);
+  summary.timings.push_back({"encode", encode_timer.finish()});
+  StageTimer unet_timer("loading the normal model's UNets");
+  model->load_unet();
+  summary.timings.push_back({"load UNets", unet_timer.finish()});
+
+  StageTimer timer("normal prediction");
   nn::SeededNoise noise(network.seed);
-  const torch::Tensor maps = model->run(inputs, settings, noise);
+  const torch::Tensor maps = model->sample(conditions, settings, noise);
   model.reset();
   release_freed_memory();
   summary.timings.push_back({"normals", timer.finish()});

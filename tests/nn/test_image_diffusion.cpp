@@ -145,6 +145,12 @@ TEST(ImageDiffusion, SeededRunsRepeatAndBadInputsAreRejected) {
   ImageDiffusionSettings wrong = settings;
   wrong.initial_latents = torch::zeros({2, 4, 4, 4});
   EXPECT_THROW(run_image_diffusion(models, {image}, wrong, noise), u3d::Error);
+  // Conditions encoded at another size (or none) do not fit the sampling settings.
+  ImageDiffusionSettings larger = settings;
+  larger.condition_width = larger.condition_height = 64;
+  const ImageConditions conditions = encode_image_conditions(models, {image}, larger);
+  EXPECT_THROW(sample_image_diffusion(models, conditions, settings, noise), u3d::Error);
+  EXPECT_THROW(sample_image_diffusion(models, ImageConditions{}, settings, noise), u3d::Error);
 }
 
 TEST(Guidance, RunsTheUnconditionalHalfFirstAndCombinesAsTheDoubledBatch) {

@@ -93,12 +93,46 @@ TEST_F(NormalFolders, FreeingTheNetworksAsDoneKeepsTheImages) {
   }
 }
 
-TEST_F(NormalFolders, MissingFilesAreNamedBeforeLoading) {
+// The pipeline stage loads the UNets only once the views are encoded and the CLIP encoder is freed:
+// the same images, and sampling without the UNets says what is missing.
+TEST_F(NormalFolders, UNetsLoadedAfterTheEncodingKeepTheImages) {
+  fs::copy_file(golden_dir("unet_ref") / "weights.pth", unique3d / "unet_state_dict.pth");
+  auto model = NormalModel::load_conditioning(base, unique3d, Precision::kFp32);
+  EXPECT_EQ(model->unet, nullptr);
+  auto in = golden_tensors("unet_ref", "inputs");
+  const torch::Tensor image = golden_tensors("unet_mv", "inputs")["pipe.test_image_uint8"];
+  NormalSettings settings;
+  settings.size = 32;
+  settings.steps = 2;
+  settings.free_networks_as_done = true;
+  const ImageConditions conditions = model->encode({image, image.flip(1).contiguous()}, settings);
+  EXPECT_TRUE(model->parts.image_encoder.is_empty());
+  GoldenPipelineNoise noise(in, /*draws_initial_latents=*/true);
   try {
-    NormalModel::load(base, unique3d, Precision::kFp32);
+    model->sample(conditions, settings, noise);
     FAIL() << "no error";
   } catch (const u3d::Error& e) {
-    EXPECT_NE(std::string(e.what()).find("unet_state_dict.pth"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("load_unet"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(noise.draws, 0);
+  model->load_unet();
+  const torch::Tensor images = model->sample(conditions, settings, noise);
+  EXPECT_EQ(noise.draws, 3);
+  EXPECT_CLOSE_TO_GOLDEN(images, golden_tensors("unet_ref", "outputs")["pipe.images"], 1e-4);
+  EXPECT_EQ(model->unet, nullptr);  // freed again before the decoding
+}
+
+TEST_F(NormalFolders, MissingFilesAreNamedBeforeLoading) {
+  for (bool conditioning_only : {false, true}) {
+    try {
+      if (conditioning_only)
+        NormalModel::load_conditioning(base, unique3d, Precision::kFp32);
+      else
+        NormalModel::load(base, unique3d, Precision::kFp32);
+      FAIL() << "no error";
+    } catch (const u3d::Error& e) {
+      EXPECT_NE(std::string(e.what()).find("unet_state_dict.pth"), std::string::npos) << e.what();
+    }
   }
 }
 

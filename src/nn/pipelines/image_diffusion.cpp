@@ -22,6 +22,16 @@ void check_rgb(const torch::Tensor& image) {
                 c10::toString(image.scalar_type()));
 }
 
+void check_sizes(const ImageDiffusionModels& models, const ImageDiffusionSettings& s) {
+  const int64_t factor = models.vae->config.scale_factor();
+  for (int64_t side : {s.width, s.height, s.condition_width, s.condition_height})
+    if (side <= 0 || side % factor != 0)
+      throw Error("image diffusion: image sizes must be positive multiples of " + std::to_string(factor) + ", got " +
+                  std::to_string(side));
+  if (s.images_per_condition < 1 || s.steps < 1)
+    throw Error("image diffusion: images_per_condition and steps must be at least 1");
+}
+
 }  // namespace
 
 torch::Tensor vae_preprocess(const torch::Tensor& rgb, int64_t width, int64_t height) {
@@ -61,34 +71,31 @@ ConditioningModels load_conditioning_models(const DiffusersFolder& folder, Preci
   return m;
 }
 
-torch::Tensor run_image_diffusion(const ImageDiffusionModels& models, const std::vector<torch::Tensor>& condition_images,
-                                  const ImageDiffusionSettings& s, NoiseSource& noise, TensorMap* trace) {
+ImageConditions encode_image_conditions(const ImageDiffusionModels& models,
+                                        const std::vector<torch::Tensor>& condition_images,
+                                        const ImageDiffusionSettings& s, TensorMap* trace) {
+  torch::NoGradGuard no_grad;
   auto record = [trace](const std::string& name, const torch::Tensor& value) {
     if (trace) (*trace)[name] = value;
   };
-  const int64_t factor = models.vae->config.scale_factor();
   if (condition_images.empty()) throw Error("image diffusion: no condition image");
   if (models.image_encoder.is_empty())
     throw Error("image diffusion: this model's networks were freed by an earlier run (free_networks_as_done)");
   for (const auto& image : condition_images) check_rgb(image);
-  for (int64_t side : {s.width, s.height, s.condition_width, s.condition_height})
-    if (side <= 0 || side % factor != 0)
-      throw Error("image diffusion: image sizes must be positive multiples of " + std::to_string(factor) + ", got " +
-                  std::to_string(side));
-  if (s.images_per_condition < 1 || s.steps < 1)
-    throw Error("image diffusion: images_per_condition and steps must be at least 1");
+  check_sizes(models, s);
   const bool guidance = s.guidance_scale > 1.0;
-  const int64_t batch = static_cast<int64_t>(condition_images.size()) * s.images_per_condition;
 
   // 1. Image embeddings, each repeated for its outputs.
   std::vector<torch::Tensor> pixels;
   for (const auto& image : condition_images) pixels.push_back(models.feature_extractor.pixel_values(image));
   const torch::Tensor pixel_values = torch::cat(pixels);
   record("clip_pixel_values", pixel_values);
-  torch::Tensor embeddings =
-      models.image_encoder->forward(pixel_values).image_embeds.unsqueeze(1).repeat_interleave(s.images_per_condition, 0);
-  if (guidance) embeddings = torch::cat({torch::zeros_like(embeddings), embeddings});
-  record("image_embeddings", embeddings);
+  ImageConditions out;
+  out.embeddings = models.image_encoder->forward(pixel_values)
+                       .image_embeds.unsqueeze(1)
+                       .repeat_interleave(s.images_per_condition, 0);
+  if (guidance) out.embeddings = torch::cat({torch::zeros_like(out.embeddings), out.embeddings});
+  record("image_embeddings", out.embeddings);
 
   // 2. Condition latents.
   // One image at a time: the VAE works on each image alone (its GroupNorms are per sample), and its
@@ -96,13 +103,35 @@ torch::Tensor run_image_diffusion(const ImageDiffusionModels& models, const std:
   std::vector<torch::Tensor> encoded;
   for (const auto& image : condition_images)
     encoded.push_back(models.vae->encode(vae_preprocess(image, s.condition_width, s.condition_height)).mode());
-  torch::Tensor condition = torch::cat(encoded) * models.vae->config.scaling_factor;
-  record("cond_latents", condition);
+  out.latents = torch::cat(encoded) * models.vae->config.scaling_factor;
+  record("cond_latents", out.latents);
   if (s.free_networks_as_done) {  // the encoder, and what the encoding left in the heap
     models.image_encoder = nullptr;
     release_freed_memory();
   }
-  if (guidance) condition = torch::cat({torch::zeros_like(condition), condition});
+  if (guidance) out.latents = torch::cat({torch::zeros_like(out.latents), out.latents});
+  return out;
+}
+
+torch::Tensor sample_image_diffusion(const ImageDiffusionModels& models, const ImageConditions& conditions,
+                                     const ImageDiffusionSettings& s, NoiseSource& noise, TensorMap* trace) {
+  torch::NoGradGuard no_grad;
+  auto record = [trace](const std::string& name, const torch::Tensor& value) {
+    if (trace) (*trace)[name] = value;
+  };
+  check_sizes(models, s);
+  const bool guidance = s.guidance_scale > 1.0;
+  const torch::Tensor& embeddings = conditions.embeddings;
+  const torch::Tensor& condition = conditions.latents;
+  const int64_t factor = models.vae->config.scale_factor();
+  if (!embeddings.defined() || !condition.defined() || embeddings.dim() != 3 || condition.dim() != 4 ||
+      embeddings.size(0) % (guidance ? 2 : 1) != 0 || condition.size(0) == 0 ||
+      embeddings.size(0) % condition.size(0) != 0 || condition.size(2) != s.condition_height / factor ||
+      condition.size(3) != s.condition_width / factor)
+    throw Error(
+        "image diffusion: the conditions do not fit the settings (encode_image_conditions with the same "
+        "settings)");
+  const int64_t batch = embeddings.size(0) / (guidance ? 2 : 1);
 
   // 3. The sampling loop.
   Scheduler& scheduler = models.scheduler;
@@ -161,6 +190,13 @@ torch::Tensor run_image_diffusion(const ImageDiffusionModels& models, const std:
   torch::Tensor images = torch::cat(decoded).contiguous();
   record("images", images);
   return images;
+}
+
+torch::Tensor run_image_diffusion(const ImageDiffusionModels& models,
+                                  const std::vector<torch::Tensor>& condition_images, const ImageDiffusionSettings& s,
+                                  NoiseSource& noise, TensorMap* trace) {
+  const ImageConditions conditions = encode_image_conditions(models, condition_images, s, trace);
+  return sample_image_diffusion(models, conditions, s, noise, trace);
 }
 
 }  // namespace u3d::nn

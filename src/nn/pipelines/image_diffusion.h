@@ -82,12 +82,30 @@ struct ImageDiffusionSettings {
   bool free_networks_as_done = false;
 };
 
-// condition_images: uint8 RGB [H, W, 3] each. Returns float [B * images_per_condition, height, width, 3]
-// in [0, 1]. Initial latents (when not given) and the scheduler's per-step noise come from `noise`, in the
-// order diffusers draws them. Reports progress_step("denoise", i, steps). When `trace` is given it
-// receives clip_pixel_values, image_embeddings, cond_latents, timesteps, step<i>.unet.{latent_model_input,
-// timestep, encoder_hidden_states, condition_latents, noise_pred_raw}, step<i>.scheduler.{model_output,
-// sample, prev_sample, pred_original_sample} and images (the golden cases' names without "pipe.").
+// Steps 1 and 2 of the loop: what the denoiser is conditioned on, for B condition images.
+struct ImageConditions {
+  torch::Tensor embeddings;  // [B * images_per_condition, 1, D], twice that with guidance
+  torch::Tensor latents;     // [B, 4, condition_height / f, condition_width / f], twice that with guidance
+};
+
+// condition_images: uint8 RGB [H, W, 3] each. Frees the image encoder (and `models` cannot encode again)
+// when settings.free_networks_as_done. `trace` receives clip_pixel_values, image_embeddings and
+// cond_latents.
+ImageConditions encode_image_conditions(const ImageDiffusionModels& models,
+                                        const std::vector<torch::Tensor>& condition_images,
+                                        const ImageDiffusionSettings& settings, TensorMap* trace = nullptr);
+
+// Steps 3 and 4. Returns float [B * images_per_condition, height, width, 3] in [0, 1]. Initial latents
+// (when not given) and the scheduler's per-step noise come from `noise`, in the order diffusers draws them.
+// Reports progress_step("denoise", i, steps). Frees the denoiser before decoding when
+// settings.free_networks_as_done. `trace` receives timesteps, step<i>.unet.{latent_model_input, timestep,
+// encoder_hidden_states, condition_latents, noise_pred_raw}, step<i>.scheduler.{model_output, sample,
+// prev_sample, pred_original_sample} and images.
+torch::Tensor sample_image_diffusion(const ImageDiffusionModels& models, const ImageConditions& conditions,
+                                     const ImageDiffusionSettings& settings, NoiseSource& noise,
+                                     TensorMap* trace = nullptr);
+
+// Both halves in turn; `trace` gets the golden cases' names without "pipe.".
 torch::Tensor run_image_diffusion(const ImageDiffusionModels& models, const std::vector<torch::Tensor>& condition_images,
                                   const ImageDiffusionSettings& settings, NoiseSource& noise, TensorMap* trace = nullptr);
 

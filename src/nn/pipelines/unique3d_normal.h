@@ -39,17 +39,35 @@ class NormalModel {
   static std::unique_ptr<NormalModel> load(const std::filesystem::path& image_variations,
                                            const std::filesystem::path& image2normal, Precision precision,
                                            const CheckpointReader& reader = {});
+  // As load() without the UNets, which load_unet() reads later: a run that encodes its views first
+  // (encode() with free_networks_as_done) never holds the CLIP image encoder, the encoding's activations
+  // and the UNets' weights (6.6 GB of the model's 8 GB in fp32) at once.
+  static std::unique_ptr<NormalModel> load_conditioning(const std::filesystem::path& image_variations,
+                                                        const std::filesystem::path& image2normal, Precision precision);
+  // Reads the UNets when `unet` is empty.
+  void load_unet();
   // The files load() reads, checked to exist (an Error names the first missing one); reads nothing.
   static std::vector<std::filesystem::path> files(const std::filesystem::path& image_variations,
                                                   const std::filesystem::path& image2normal);
 
   // views: uint8 RGB [H, W, 3] each (the official app passes the views on white). Returns float
   // [views, size, size, 3] in [0, 1]: each view's normal map in camera space as the model draws it.
+  // encode() then sample(), loading the UNets in between when they are not loaded.
   torch::Tensor run(const std::vector<torch::Tensor>& views, const NormalSettings& settings, NoiseSource& noise,
                     TensorMap* trace = nullptr);
+  // run()'s two halves (nn/pipelines/image_diffusion.h); sample() needs the UNets.
+  ImageConditions encode(const std::vector<torch::Tensor>& views, const NormalSettings& settings,
+                         TensorMap* trace = nullptr);
+  torch::Tensor sample(const ImageConditions& conditions, const NormalSettings& settings, NoiseSource& noise,
+                       TensorMap* trace = nullptr);
 
   ConditioningModels parts;
   std::unique_ptr<ReferenceUNet> unet;
+
+ private:
+  ImageDiffusionModels models();
+  std::filesystem::path image_variations_, image2normal_;
+  Precision precision_ = Precision::kFp32;
 };
 
 }  // namespace u3d::nn
