@@ -31,7 +31,8 @@ struct NetworkStageSummary {
   double total_seconds() const;
 };
 
-// The precision the request asks for, or the CPU's default; an Error when it cannot run here.
+// The precision the request asks for, or the CPU's default; an Error when it cannot run here, a warning
+// (once) when it runs slowly here: bf16 without avx512_bf16.
 nn::Precision resolve_precision(const NetworkOptions& options);
 
 // The process's peak resident memory in MiB since it started or since the last reset_peak_memory()
