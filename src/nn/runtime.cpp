@@ -7,6 +7,7 @@
 
 #include "core/memory.h"
 #include "core/parallel.h"
+#include "core/sanitizer.h"
 #include "nn/tensor_allocator.h"
 
 namespace u3d::nn {
@@ -19,7 +20,8 @@ bool cpu_runs_avx512_kernels() {
 
 int configure_torch_threads(int threads) {
   u3d::keep_freed_memory_for_reuse();  // networks free and reallocate tens of MB every layer
-  install_tensor_allocator();
+  // ASan watches the bounds of malloc's blocks only, not of the tensor allocator's mappings.
+  if (!kUnderAsan) install_tensor_allocator();
   // libtorch 1.13 uses AVX2 kernels unless told otherwise. With AVX-512 the full UNet took about 15%
   // less CPU time here (bench_unet); overwrite=0 keeps a user's own choice. ATen 1.13 takes the
   // variable on trust, so it is only set where the CPU has the instructions (else: SIGILL).

@@ -9,8 +9,8 @@ namespace u3d::nn {
 // It also asks libtorch for its AVX-512 kernels (ATEN_CPU_CAPABILITY=avx512) when the CPU has them
 // and the user did not set that variable; libtorch 1.13 would not check the CPU itself. libtorch fixes
 // its kernel choice at its first operation, so call this before running any network.
-// It also calls u3d::keep_freed_memory_for_reuse() (core/memory.h) and install_tensor_allocator()
-// (nn/tensor_allocator.h).
+// It also calls u3d::keep_freed_memory_for_reuse() (core/memory.h) and, except in AddressSanitizer
+// builds, install_tensor_allocator() (nn/tensor_allocator.h).
 // Returns the intra-op thread count now in effect.
 int configure_torch_threads(int threads = 0);
 

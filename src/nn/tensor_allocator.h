@@ -18,7 +18,8 @@ constexpr size_t kLargeBlockBytes = size_t{8} << 20;
 constexpr size_t kLargeBlockCacheBytes = size_t{128} << 20;
 
 // Makes this allocator libtorch's CPU allocator. Idempotent; tensors allocated before keep their own
-// deleters, so it may be called at any time. Called by configure_torch_threads (nn/runtime.h).
+// deleters, so it may be called at any time. Called by configure_torch_threads (nn/runtime.h), except
+// in AddressSanitizer builds.
 void install_tensor_allocator();
 
 struct TensorAllocatorStats {

@@ -30,7 +30,7 @@ long faults_to_fill_a_fresh_block(size_t bytes) {
 }  // namespace
 
 TEST(Memory, FreedLargeBlocksAreReusedWithoutPageFaults) {
-  if (u3d::test::kUnderAsan) GTEST_SKIP() << "ASan replaces glibc's allocator, whose settings this test checks";
+  if (u3d::kUnderAsan) GTEST_SKIP() << "ASan replaces glibc's allocator, whose settings this test checks";
   u3d::keep_freed_memory_for_reuse();
   const size_t bytes = size_t{64} << 20;  // above glibc's largest mmap threshold (32 MB)
   faults_to_fill_a_fresh_block(bytes);    // maps the pages once

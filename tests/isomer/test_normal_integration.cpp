@@ -126,7 +126,7 @@ TEST(NormalIntegration, MaskIsRespected) {
 // time says little. The pipeline integrates at 192 px (as the official code); 256 px must stay
 // well under a second of CPU, 512 px is printed for the record.
 TEST(NormalIntegration, FastAt256And512Pixels) {
-  if (u3d::test::kUnderAsan) GTEST_SKIP() << "a timing bound; ASan runs several times slower";
+  if (u3d::kUnderAsan) GTEST_SKIP() << "a timing bound; ASan runs several times slower";
   for (int size : {256, 512}) {
     const float R = 0.49f * size, rim = 0.47f * size;
     Field f = make_field(size, rim, [&](float x, float y) { return std::sqrt(R * R - x * x - y * y); },
