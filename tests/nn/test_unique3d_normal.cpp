@@ -29,19 +29,26 @@ class NormalFolders : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(root); }
 
-  // Returns the model after its run.
-  std::unique_ptr<NormalModel> expect_official_images(Precision precision, double tolerance,
-                                                      bool free_networks_as_done = false) {
-    auto model = NormalModel::load(base, unique3d, precision);
-    auto in = golden_tensors("unet_ref", "inputs");
-    auto ref = golden_tensors("unet_ref", "outputs");
+  // The golden case's two views (the test image and its mirror) and settings.
+  static std::vector<torch::Tensor> golden_views() {
     const torch::Tensor image = golden_tensors("unet_mv", "inputs")["pipe.test_image_uint8"];
+    return {image, image.flip(1).contiguous()};
+  }
+  static NormalSettings golden_settings(bool free_networks_as_done) {
     NormalSettings settings;
     settings.size = 32;
     settings.steps = 2;
     settings.free_networks_as_done = free_networks_as_done;
-    GoldenPipelineNoise noise(in, /*draws_initial_latents=*/true);
-    torch::Tensor images = model->run({image, image.flip(1).contiguous()}, settings, noise);
+    return settings;
+  }
+
+  // Returns the model after its run.
+  std::unique_ptr<NormalModel> expect_official_images(Precision precision, double tolerance,
+                                                      bool free_networks_as_done = false) {
+    auto model = NormalModel::load(base, unique3d, precision);
+    auto ref = golden_tensors("unet_ref", "outputs");
+    GoldenPipelineNoise noise(golden_tensors("unet_ref", "inputs"), /*draws_initial_latents=*/true);
+    torch::Tensor images = model->run(golden_views(), golden_settings(free_networks_as_done), noise);
     EXPECT_EQ(noise.draws, 3);
     if (precision == Precision::kFp32)
       EXPECT_CLOSE_TO_GOLDEN(images, ref["pipe.images"], tolerance);
@@ -99,15 +106,10 @@ TEST_F(NormalFolders, UNetsLoadedAfterTheEncodingKeepTheImages) {
   fs::copy_file(golden_dir("unet_ref") / "weights.pth", unique3d / "unet_state_dict.pth");
   auto model = NormalModel::load_conditioning(base, unique3d, Precision::kFp32);
   EXPECT_EQ(model->unet, nullptr);
-  auto in = golden_tensors("unet_ref", "inputs");
-  const torch::Tensor image = golden_tensors("unet_mv", "inputs")["pipe.test_image_uint8"];
-  NormalSettings settings;
-  settings.size = 32;
-  settings.steps = 2;
-  settings.free_networks_as_done = true;
-  const ImageConditions conditions = model->encode({image, image.flip(1).contiguous()}, settings);
+  const NormalSettings settings = golden_settings(/*free_networks_as_done=*/true);
+  const ImageConditions conditions = model->encode(golden_views(), settings);
   EXPECT_TRUE(model->parts.image_encoder.is_empty());
-  GoldenPipelineNoise noise(in, /*draws_initial_latents=*/true);
+  GoldenPipelineNoise noise(golden_tensors("unet_ref", "inputs"), /*draws_initial_latents=*/true);
   try {
     model->sample(conditions, settings, noise);
     FAIL() << "no error";
