@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <initializer_list>
 
 namespace {
 

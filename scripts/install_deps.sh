@@ -6,7 +6,7 @@ set -euo pipefail
 
 PACKAGES=(
   build-essential cmake ninja-build ccache pkg-config git
-  libtorch-dev libopenblas0-pthread libopenblas0-openmp
+  libtorch-dev libdnnl-dev libopenblas0-pthread libopenblas0-openmp
   libopencv-dev libeigen3-dev libopen3d-dev libtinygltf-dev
   libcli11-dev nlohmann-json3-dev libstb-dev
   libgtest-dev libgmock-dev libbenchmark-dev

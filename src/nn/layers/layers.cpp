@@ -1,5 +1,7 @@
 #include "nn/layers/layers.h"
 
+#include "nn/layers/group_norm_kernel.h"
+
 namespace u3d::nn {
 
 LinearImpl::LinearImpl(int64_t in_features, int64_t out_features, bool has_bias, const torch::TensorOptions& options) {
@@ -17,6 +19,7 @@ Conv2dImpl::Conv2dImpl(int64_t in_channels, int64_t out_channels, int64_t kernel
 }
 
 torch::Tensor Conv2dImpl::forward(const torch::Tensor& x) {
+  if (OnednnConv2d::applies(x, weight)) return onednn_->forward(x, weight, bias, stride, padding);
   return torch::conv2d(x, weight, bias, {stride, stride}, {padding, padding});
 }
 
@@ -28,9 +31,17 @@ GroupNormImpl::GroupNormImpl(int64_t groups_, int64_t channels, double eps_, con
 }
 
 torch::Tensor GroupNormImpl::forward(const torch::Tensor& x) {
+  if (group_norm_channels_last_applies(x, weight)) return group_norm_channels_last(x, groups, weight, bias, eps, false);
   if (x.scalar_type() == weight.scalar_type()) return torch::group_norm(x, groups, weight, bias, eps);
-  // Reduced-precision activations, fp32 weights (nn/precision.h): statistics and scaling in fp32.
-  return torch::group_norm(x.to(weight.scalar_type()), groups, weight, bias, eps).to(x.scalar_type());
+  // Reduced-precision activations, fp32 weights (nn/precision.h): statistics and scaling in fp32. NCHW:
+  // ATen 1.13's fp32 GroupNorm of channels-last input loses precision at large offsets (docs/networks.md).
+  return torch::group_norm(x.to(weight.scalar_type()).contiguous(), groups, weight, bias, eps).to(x.scalar_type());
+}
+
+torch::Tensor GroupNormImpl::forward_silu(const torch::Tensor& x) {
+  if (group_norm_channels_last_applies(x, weight)) return group_norm_channels_last(x, groups, weight, bias, eps, true);
+  torch::Tensor y = forward(x);
+  return torch::silu_(y);
 }
 
 LayerNormImpl::LayerNormImpl(int64_t dim, double eps_, const torch::TensorOptions& options) : eps(eps_) {

@@ -5,6 +5,10 @@
 // nothing, and on the meta device nothing is allocated at all (used to check key names and shapes).
 #include <torch/torch.h>
 
+#include <memory>
+
+#include "nn/layers/onednn_conv.h"
+
 namespace u3d::nn {
 
 class LinearImpl : public torch::nn::Module {
@@ -22,6 +26,10 @@ class Conv2dImpl : public torch::nn::Module {
   torch::Tensor forward(const torch::Tensor& x);
   torch::Tensor weight, bias;
   int64_t stride, padding;
+
+ private:
+  // bf16 on the CPU: oneDNN directly, with the weights packed once (nn/layers/onednn_conv.h).
+  std::shared_ptr<OnednnConv2d> onednn_ = std::make_shared<OnednnConv2d>();
 };
 TORCH_MODULE(Conv2d);
 
@@ -31,6 +39,8 @@ class GroupNormImpl : public torch::nn::Module {
  public:
   GroupNormImpl(int64_t groups, int64_t channels, double eps, const torch::TensorOptions& options);
   torch::Tensor forward(const torch::Tensor& x);
+  // silu(forward(x)); one pass for channels-last bf16 activations (nn/layers/group_norm_kernel.h).
+  torch::Tensor forward_silu(const torch::Tensor& x);
   torch::Tensor weight, bias;
   int64_t groups;
   double eps;

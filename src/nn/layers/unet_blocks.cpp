@@ -18,13 +18,9 @@ ResnetBlock2DImpl::ResnetBlock2DImpl(int64_t in_channels, int64_t out_channels, 
 torch::Tensor ResnetBlock2DImpl::forward(const torch::Tensor& x, const torch::Tensor& temb) {
   // In place where the result is fresh, so that at most the input and two maps of the block's size
   // are alive at once (the VAE at 1024 px: 0.5-1 GB each in fp32).
-  torch::Tensor h = norm1->forward(x);
-  torch::silu_(h);
-  h = conv1->forward(h);
+  torch::Tensor h = conv1->forward(norm1->forward_silu(x));
   if (time_emb_proj && temb.defined()) h.add_(time_emb_proj->forward(torch::silu(temb)).unsqueeze(-1).unsqueeze(-1));
-  h = norm2->forward(h);
-  torch::silu_(h);
-  h = conv2->forward(h);
+  h = conv2->forward(norm2->forward_silu(h));
   return h.add_(conv_shortcut ? conv_shortcut->forward(x) : x);
 }
 

@@ -86,7 +86,7 @@ torch::Tensor RRDBNetImpl::forward(const torch::Tensor& input) {
   const auto nearest2 = F::InterpolateFuncOptions().scale_factor(std::vector<double>{2.0, 2.0}).mode(torch::kNearest);
   feat = lrelu(conv_up1(F::interpolate(feat, nearest2)));
   feat = lrelu(conv_up2(F::interpolate(feat, nearest2)));
-  return conv_last(lrelu(conv_hr(feat))).to(input.scalar_type());
+  return conv_last(lrelu(conv_hr(feat))).to(input.scalar_type()).contiguous();  // NCHW (bf16 runs channels-last)
 }
 
 RRDBNet load_rrdbnet(const std::filesystem::path& path) {

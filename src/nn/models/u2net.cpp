@@ -179,6 +179,7 @@ std::vector<torch::Tensor> U2NetImpl::forward(const torch::Tensor& input) {
   for (const auto& l : logits) out.push_back(torch::sigmoid(l).to(input.scalar_type()));
   if (config.isnet)
     for (const auto& f : dec) out.push_back(f.to(input.scalar_type()));
+  for (auto& t : out) t = t.contiguous();  // NCHW for the caller (bf16 convolutions work channels-last)
   return out;
 }
 

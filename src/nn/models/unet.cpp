@@ -302,8 +302,8 @@ torch::Tensor UNet2DConditionModelImpl::forward(const torch::Tensor& sample, con
     h = up_blocks[i]->forward(std::move(h), emb, context, skips);
     record("up_blocks." + std::to_string(i), h);
   }
-  h = torch::silu(conv_norm_out->forward(h));
-  return conv_out->forward(h).to(sample.scalar_type());
+  // contiguous(): bf16 convolutions work channels-last (nn/layers/onednn_conv.h); callers get NCHW.
+  return conv_out->forward(conv_norm_out->forward_silu(h)).to(sample.scalar_type()).contiguous();
 }
 
 }  // namespace u3d::nn

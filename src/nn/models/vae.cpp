@@ -133,8 +133,7 @@ torch::Tensor VaeEncoderImpl::forward(const torch::Tensor& image) {
   torch::Tensor h = conv_in->forward(image);
   for (auto& b : down_blocks) h = b->forward(h);
   h = mid_block->forward(h);
-  h = conv_norm_out->forward(h);
-  return conv_out->forward(torch::silu_(h));
+  return conv_out->forward(conv_norm_out->forward_silu(h));
 }
 
 VaeDecoderImpl::VaeDecoderImpl(const AutoencoderKLConfig& c, const torch::TensorOptions& t) {
@@ -155,8 +154,7 @@ torch::Tensor VaeDecoderImpl::forward(const torch::Tensor& latent) {
   torch::Tensor h = conv_in->forward(latent);
   h = mid_block->forward(h);
   for (auto& b : up_blocks) h = b->forward(h);
-  h = conv_norm_out->forward(h);
-  return conv_out->forward(torch::silu_(h));
+  return conv_out->forward(conv_norm_out->forward_silu(h));
 }
 
 namespace {
@@ -220,6 +218,7 @@ LatentDistribution AutoencoderKLImpl::encode(const torch::Tensor& image) {
   // Runs in the dtype of its weights (nn/precision.h); returns the image's dtype.
   auto moments = quant_conv->forward(encoder->forward(image.to(quant_conv->weight.scalar_type())))
                      .to(image.scalar_type())
+                     .contiguous()  // NCHW for the caller (bf16 convolutions work channels-last)
                      .chunk(2, 1);
   return {moments[0], moments[1].clamp(-30.0, 20.0)};
 }
@@ -229,7 +228,8 @@ torch::Tensor AutoencoderKLImpl::decode(const torch::Tensor& latent) {
     throw Error("VAE decode: latent must be [N, " + std::to_string(config.latent_channels) + ", h, w], got " +
                 c10::str(latent.sizes()));
   return decoder->forward(post_quant_conv->forward(latent.to(post_quant_conv->weight.scalar_type())))
-      .to(latent.scalar_type());
+      .to(latent.scalar_type())
+      .contiguous();
 }
 
 torch::Tensor AutoencoderKLImpl::decode_tiled(const torch::Tensor& latent, const VaeTiling& tiling) {

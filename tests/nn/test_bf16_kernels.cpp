@@ -1,0 +1,178 @@
+// The bf16 CPU kernels behind Conv2d and GroupNorm (nn/layers/onednn_conv.h,
+// nn/layers/group_norm_kernel.h), against ATen in fp32 on the same bf16 values.
+#include <ATen/Parallel.h>
+#include <gtest/gtest.h>
+
+#include "golden.h"
+#include "nn/layers/group_norm_kernel.h"
+#include "nn/layers/layers.h"
+#include "nn/precision.h"
+
+namespace u3d::nn {
+namespace {
+
+using namespace u3d::nn::test;
+
+// Whether every element of `actual` (bf16) is `expected` (fp32) rounded to bf16, give or take one unit
+// in the last place of bf16 (2^-8 relative) where the fp32 statistics or sums differ in their last bits.
+::testing::AssertionResult within_one_bf16_step(const torch::Tensor& actual, const torch::Tensor& expected) {
+  const torch::Tensor a = actual.to(torch::kFloat), e = expected.to(torch::kFloat);
+  const torch::Tensor bound = e.abs() * (1.0 / 128) + 1e-30;
+  const torch::Tensor excess = (a - e).abs() - bound;
+  const double worst = excess.max().item<double>();
+  if (worst <= 0) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "largest excess over one bf16 step: " << worst;
+}
+
+struct ConvCase {
+  int64_t batch, in, out, height, width, kernel, stride, padding;
+  bool bias;
+};
+
+TEST(Bf16Kernels, ConvolutionMatchesFp32OnTheSameValues) {
+  if (!cpu_has_bf16_kernels()) GTEST_SKIP() << "the oneDNN path needs avx512_bf16";
+  torch::NoGradGuard no_grad;
+  torch::manual_seed(11);
+  const ConvCase cases[] = {
+      {2, 8, 16, 9, 7, 3, 1, 1, true},    // odd sizes
+      {1, 16, 8, 12, 10, 3, 2, 1, true},  // a downsampler
+      {3, 24, 40, 5, 6, 1, 1, 0, false},  // 1x1, no bias
+      {8, 64, 32, 4, 4, 3, 1, 1, true},   // 16 output pixels: the direct kernel
+      {2, 4, 8, 1, 1, 3, 1, 1, true},     // one pixel
+  };
+  for (const ConvCase& c : cases) {
+    SCOPED_TRACE(testing::Message() << c.batch << "x" << c.in << "x" << c.height << "x" << c.width << " -> " << c.out
+                                    << " k" << c.kernel << " s" << c.stride);
+    Conv2d conv(c.in, c.out, c.kernel, c.stride, c.padding, c.bias, torch::TensorOptions());
+    randomize_parameters(*conv, 0.2);
+    set_precision(*conv, Precision::kBf16);
+    const torch::Tensor x = torch::randn({c.batch, c.in, c.height, c.width}).to(torch::kBFloat16);
+    const torch::Tensor y = conv->forward(x);
+    EXPECT_EQ(y.scalar_type(), torch::kBFloat16);
+    EXPECT_TRUE(y.is_contiguous(at::MemoryFormat::ChannelsLast));
+    const torch::Tensor bias = c.bias ? conv->bias.to(torch::kFloat) : torch::Tensor();
+    const torch::Tensor expected = torch::conv2d(x.to(torch::kFloat), conv->weight.to(torch::kFloat), bias,
+                                                 {c.stride, c.stride}, {c.padding, c.padding});
+    ASSERT_EQ(y.sizes(), expected.sizes());
+    // fp32 sums of bf16 products, one rounding at the end.
+    EXPECT_LT(relative_error(y.to(torch::kFloat), expected), 4e-3);
+    // A channels-last input takes the same path and gives the same values.
+    EXPECT_TRUE(torch::equal(conv->forward(x.contiguous(at::MemoryFormat::ChannelsLast)), y));
+  }
+}
+
+TEST(Bf16Kernels, ConvolutionFollowsWeightsChangedAfterTheFirstCall) {
+  if (!cpu_has_bf16_kernels()) GTEST_SKIP() << "the oneDNN path needs avx512_bf16";
+  torch::NoGradGuard no_grad;
+  torch::manual_seed(12);
+  Conv2d conv(8, 8, 3, 1, 1, true, torch::TensorOptions());
+  randomize_parameters(*conv, 0.2);
+  set_precision(*conv, Precision::kBf16);
+  const torch::Tensor x = torch::randn({2, 8, 6, 6}).to(torch::kBFloat16);
+  const auto reference = [&] {
+    return torch::conv2d(x.to(torch::kFloat), conv->weight.to(torch::kFloat), conv->bias.to(torch::kFloat), {1, 1},
+                         {1, 1});
+  };
+  const torch::Tensor first = conv->forward(x);
+  EXPECT_LT(relative_error(first.to(torch::kFloat), reference()), 4e-3);
+  // Modified in place (as a weight loader's copy_ does): the packed copy is rebuilt.
+  conv->weight.neg_();
+  EXPECT_LT(relative_error(conv->forward(x).to(torch::kFloat), reference()), 4e-3);
+  // Replaced by another tensor.
+  conv->weight.set_data(torch::randn({8, 8, 3, 3}).to(torch::kBFloat16));
+  EXPECT_LT(relative_error(conv->forward(x).to(torch::kFloat), reference()), 4e-3);
+  // A second input size gets its own plan, and the first one still answers.
+  const torch::Tensor larger = torch::randn({1, 8, 11, 5}).to(torch::kBFloat16);
+  const torch::Tensor y = conv->forward(larger);
+  EXPECT_LT(relative_error(y.to(torch::kFloat), torch::conv2d(larger.to(torch::kFloat), conv->weight.to(torch::kFloat),
+                                                              conv->bias.to(torch::kFloat), {1, 1}, {1, 1})),
+            4e-3);
+  EXPECT_LT(relative_error(conv->forward(x).to(torch::kFloat), reference()), 4e-3);
+}
+
+TEST(Bf16Kernels, ConvolutionRejectsAChannelMismatch) {
+  if (!cpu_has_bf16_kernels()) GTEST_SKIP() << "the oneDNN path needs avx512_bf16";
+  torch::NoGradGuard no_grad;
+  Conv2d conv(8, 4, 3, 1, 1, true, torch::TensorOptions());
+  set_precision(*conv, Precision::kBf16);
+  EXPECT_THROW(conv->forward(torch::zeros({1, 6, 4, 4}, torch::kBFloat16)), c10::Error);
+}
+
+// GroupNorm of the same bf16 values in fp32 by ATen, then SiLU in fp32 if asked.
+// In double and NCHW: ATen 1.13's fp32 GroupNorm of channels-last input drifts at large offsets.
+torch::Tensor group_norm_reference(const torch::Tensor& x, const GroupNorm& norm, bool silu) {
+  torch::Tensor y = torch::group_norm(x.to(torch::kDouble).contiguous(), norm->groups, norm->weight.to(torch::kDouble),
+                                      norm->bias.to(torch::kDouble), norm->eps);
+  return silu ? torch::silu(y) : y;
+}
+
+TEST(Bf16Kernels, GroupNormOfChannelsLastInputMatchesFp32) {
+  torch::NoGradGuard no_grad;
+  torch::manual_seed(13);
+  struct Case {
+    int64_t batch, channels, groups, height, width;
+  };
+  // 70x70 pixels: 19 full blocks of the statistics and a partial one; 1x1: a single pixel.
+  for (const Case& c : {Case{2, 64, 32, 9, 7}, Case{1, 32, 8, 70, 70}, Case{3, 12, 3, 1, 1}}) {
+    SCOPED_TRACE(testing::Message() << c.batch << "x" << c.channels << "x" << c.height << "x" << c.width);
+    GroupNorm norm(c.groups, c.channels, 1e-6, torch::TensorOptions());
+    randomize_parameters(*norm, 1.0);
+    // A large common offset and a wide range: variance from E[x^2] - mean^2 would lose it.
+    const torch::Tensor x = (torch::randn({c.batch, c.channels, c.height, c.width}) * 3.0 + 200.0)
+                                .to(torch::kBFloat16)
+                                .contiguous(at::MemoryFormat::ChannelsLast);
+    ASSERT_TRUE(group_norm_channels_last_applies(x, norm->weight));
+    for (bool silu : {false, true}) {
+      SCOPED_TRACE(silu ? "with SiLU" : "plain");
+      const torch::Tensor y = silu ? norm->forward_silu(x) : norm->forward(x);
+      EXPECT_EQ(y.scalar_type(), torch::kBFloat16);
+      EXPECT_TRUE(y.is_contiguous(at::MemoryFormat::ChannelsLast));
+      EXPECT_TRUE(within_one_bf16_step(y, group_norm_reference(x, norm, silu)));
+    }
+  }
+}
+
+TEST(Bf16Kernels, GroupNormSiluCoversTheWholeRange) {
+  torch::NoGradGuard no_grad;
+  // Normalised values from -100 to 100 (weight 1, bias 0 would squeeze them): SiLU's exp must neither
+  // overflow nor lose the small tail.
+  GroupNorm norm(1, 16, 1e-6, torch::TensorOptions());
+  norm->weight.fill_(40.0);
+  norm->bias.zero_();
+  const torch::Tensor x = torch::linspace(-2.5, 2.5, 16 * 64)
+                              .reshape({1, 16, 8, 8})
+                              .to(torch::kBFloat16)
+                              .contiguous(at::MemoryFormat::ChannelsLast);
+  const torch::Tensor y = norm->forward_silu(x);
+  EXPECT_TRUE(torch::isfinite(y).all().item<bool>());
+  EXPECT_TRUE(within_one_bf16_step(y, group_norm_reference(x, norm, true)));
+}
+
+TEST(Bf16Kernels, GroupNormDoesNotDependOnTheThreadCount) {
+  torch::NoGradGuard no_grad;
+  torch::manual_seed(14);
+  GroupNorm norm(8, 32, 1e-6, torch::TensorOptions());
+  randomize_parameters(*norm, 1.0);
+  const torch::Tensor x = torch::randn({2, 32, 40, 40}).to(torch::kBFloat16).contiguous(at::MemoryFormat::ChannelsLast);
+  const int threads = at::get_num_threads();
+  at::set_num_threads(1);
+  const torch::Tensor one = norm->forward_silu(x);
+  at::set_num_threads(std::max(threads, 2));
+  const torch::Tensor many = norm->forward_silu(x);
+  at::set_num_threads(threads);
+  EXPECT_TRUE(torch::equal(one, many));
+}
+
+TEST(Bf16Kernels, GroupNormOfOtherLayoutsStaysWithAten) {
+  torch::NoGradGuard no_grad;
+  GroupNorm norm(4, 16, 1e-5, torch::TensorOptions());
+  const torch::Tensor x = torch::randn({2, 16, 5, 5}).to(torch::kBFloat16);  // NCHW
+  EXPECT_FALSE(group_norm_channels_last_applies(x, norm->weight));
+  EXPECT_FALSE(
+      group_norm_channels_last_applies(x.to(torch::kFloat).contiguous(at::MemoryFormat::ChannelsLast), norm->weight));
+  const torch::Tensor y = norm->forward_silu(x);
+  EXPECT_TRUE(torch::equal(y, torch::silu(group_norm_reference(x, norm, false).to(torch::kBFloat16))));
+}
+
+}  // namespace
+}  // namespace u3d::nn
