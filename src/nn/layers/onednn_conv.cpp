@@ -1,5 +1,7 @@
 #include "nn/layers/onednn_conv.h"
 
+#include "nn/precision.h"
+
 #include <dnnl.hpp>
 
 #include <array>
@@ -19,12 +21,6 @@ using DataType = dnnl::memory::data_type;
 dnnl::engine& cpu_engine() {
   static dnnl::engine engine(dnnl::engine::kind::cpu, 0);
   return engine;
-}
-
-bool cpu_has_avx512_bf16() {
-  static const bool has = __builtin_cpu_supports("avx512bf16") && __builtin_cpu_supports("avx512f") &&
-                          __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512vl");
-  return has;
 }
 
 // What identifies the weights a plan was built from: replacing the tensor (set_data, a new load) changes
@@ -120,7 +116,7 @@ struct OnednnConv2d::State {
 
 bool OnednnConv2d::applies(const torch::Tensor& x, const torch::Tensor& weight) {
   return x.device().is_cpu() && x.scalar_type() == torch::kBFloat16 && weight.scalar_type() == torch::kBFloat16 &&
-         weight.device().is_cpu() && x.dim() == 4 && cpu_has_avx512_bf16();
+         weight.device().is_cpu() && x.dim() == 4 && cpu_has_bf16_kernels();
 }
 
 OnednnConv2d::OnednnConv2d() : state_(std::make_unique<State>()) {}
