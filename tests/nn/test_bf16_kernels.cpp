@@ -1,11 +1,17 @@
-// The bf16 CPU kernels behind Conv2d and GroupNorm (nn/layers/onednn_conv.h,
-// nn/layers/group_norm_kernel.h), against ATen in fp32 on the same bf16 values.
+// The bf16 CPU kernels behind Conv2d, GroupNorm and the attention softmax (nn/layers/onednn_conv.h,
+// nn/layers/group_norm_kernel.h, nn/layers/softmax_kernel.h), against ATen in fp32 or float64 on the
+// same bf16 values.
 #include <ATen/Parallel.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
+
 #include "golden.h"
+#include "nn/layers/attention.h"
 #include "nn/layers/group_norm_kernel.h"
 #include "nn/layers/layers.h"
+#include "nn/layers/softmax_kernel.h"
 #include "nn/precision.h"
 
 namespace u3d::nn {
@@ -172,6 +178,63 @@ TEST(Bf16Kernels, GroupNormOfOtherLayoutsStaysWithAten) {
       group_norm_channels_last_applies(x.to(torch::kFloat).contiguous(at::MemoryFormat::ChannelsLast), norm->weight));
   const torch::Tensor y = norm->forward_silu(x);
   EXPECT_TRUE(torch::equal(y, torch::silu(group_norm_reference(x, norm, false).to(torch::kBFloat16))));
+}
+
+TEST(Bf16Kernels, ScaledSoftmaxMatchesFloat64) {
+  torch::NoGradGuard no_grad;
+  torch::manual_seed(15);
+  const double scale = 1.0 / std::sqrt(40.0);
+  // 4,096 and 1,024 keys (whole vectors), 77 (a tail of 13), 5 (a tail only) and 1.
+  for (const int64_t keys : {4096, 1024, 77, 5, 1}) {
+    SCOPED_TRACE(testing::Message() << keys << " keys");
+    // Scores up to about +-400: after the scale, exp spans far more than fp32 (the small ones must
+    // come out as 0, not as garbage or NaN).
+    torch::Tensor scores = (torch::randn({3, 7, keys}) * 100.0).to(torch::kBFloat16);
+    const torch::Tensor expected = (scores.to(torch::kDouble) * scale).softmax(-1);
+    ASSERT_TRUE(scaled_softmax_applies(scores));
+    scaled_softmax_(scores, scale);
+    EXPECT_EQ(scores.scalar_type(), torch::kBFloat16);
+    EXPECT_TRUE(within_one_bf16_step(scores, expected));
+    // Rows sum to one within bf16's rounding.
+    EXPECT_LT((scores.to(torch::kDouble).sum(-1) - 1.0).abs().max().item<double>(), 1e-2);
+  }
+}
+
+TEST(Bf16Kernels, ScaledSoftmaxOfMaskedScores) {
+  torch::NoGradGuard no_grad;
+  const float inf = std::numeric_limits<float>::infinity();
+  torch::Tensor scores = torch::tensor({0.0f, -inf, 1.0f, -inf, 2.0f}).reshape({1, 5}).to(torch::kBFloat16);
+  scaled_softmax_(scores, 1.0);
+  const torch::Tensor expected = torch::tensor({0.0f, -inf, 1.0f, -inf, 2.0f}).to(torch::kDouble).softmax(-1);
+  EXPECT_TRUE(within_one_bf16_step(scores.reshape({5}), expected));
+  EXPECT_EQ(scores[0][1].item<float>(), 0.0f);
+  // A row of -inf only has no softmax: NaN, as ATen's.
+  torch::Tensor masked = torch::full({2, 20}, -inf).to(torch::kBFloat16);
+  scaled_softmax_(masked, 1.0);
+  EXPECT_TRUE(torch::isnan(masked).all().item<bool>());
+  torch::Tensor fp32 = torch::zeros({2, 3});
+  EXPECT_FALSE(scaled_softmax_applies(fp32));
+  EXPECT_THROW(scaled_softmax_(fp32, 1.0), c10::Error);
+}
+
+// The whole attention in bf16 against fp32 on the same bf16 inputs, in one block and in blocks of
+// queries (a small score budget).
+TEST(Bf16Kernels, AttentionMatchesFp32OnTheSameValues) {
+  torch::NoGradGuard no_grad;
+  torch::manual_seed(16);
+  const int64_t heads = 4;
+  const torch::Tensor q = torch::randn({2, 300, heads * 40}).to(torch::kBFloat16);
+  const torch::Tensor k = torch::randn({2, 77, heads * 40}).to(torch::kBFloat16);
+  const torch::Tensor v = torch::randn({2, 77, heads * 40}).to(torch::kBFloat16);
+  const double scale = 1.0 / std::sqrt(40.0);
+  const torch::Tensor expected =
+      multi_head_attention(q.to(torch::kFloat), k.to(torch::kFloat), v.to(torch::kFloat), heads, scale);
+  for (const int64_t budget : {kDefaultAttentionScoreBudget, int64_t{77 * 32}}) {
+    SCOPED_TRACE(testing::Message() << "score budget " << budget);
+    const torch::Tensor out = multi_head_attention(q, k, v, heads, scale, budget);
+    EXPECT_EQ(out.scalar_type(), torch::kBFloat16);
+    EXPECT_LT(relative_error(out.to(torch::kFloat), expected), 1e-2);
+  }
 }
 
 }  // namespace

@@ -30,7 +30,8 @@ namespace u3d::nn {
 
 // q [B, Lq, H*D], k and v [B, Lk, H*D] -> [B, Lq, H*D]. `scale` multiplies q before the product (same
 // math as diffusers' alpha on q·kᵀ, and it never uses baddbmm, whose beta=0 path returns NaN on CPU in
-// libtorch 1.13). The softmax computes in fp32 for fp16/bf16 inputs and returns their dtype. When all
+// libtorch 1.13); in bf16 on the CPU it multiplies the scores in fp32 inside the softmax kernel
+// (nn/layers/softmax_kernel.h). The softmax computes in fp32 for fp16/bf16 inputs and returns their dtype. When all
 // B·H·Lq·Lk scores exceed `score_budget` elements, each head's queries go in blocks of at most that
 // many scores, one block per thread at a time, reading q, k, v and writing the output in place: long
 // self-attention never materialises its full score matrix nor a head-split copy of its inputs. The

@@ -1,5 +1,7 @@
 #include "nn/layers/group_norm_kernel.h"
 
+#include "nn/layers/vector_math.h"
+
 #include <ATen/Parallel.h>
 
 #include <algorithm>
@@ -12,43 +14,25 @@ namespace u3d::nn {
 
 namespace {
 
+using vector_math::bf16_to_float;
+using vector_math::exp_nonpositive;
+using vector_math::f32x16;
+using vector_math::kWidth;
+using vector_math::load;
+using vector_math::load_bf16;
+using vector_math::splat;
+using vector_math::store_bf16;
+using vector_math::u32x16;
+
 // Pixels per block of the statistics: each block's channel sums are accumulated in fp32.
 constexpr int64_t kBlockPixels = 256;
 
-// The loops below are plain C++ that the compiler vectorises; each is built for AVX-512, AVX2 and the
-// baseline, and the loader picks the widest the CPU runs.
-#define U3D_VECTOR_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
-
-inline float bf16_to_float(uint16_t v) { return std::bit_cast<float>(static_cast<uint32_t>(v) << 16); }
-
-// Round to nearest, ties to even (NaN stays a quiet NaN), as c10::BFloat16 does.
-inline uint16_t float_to_bf16(float f) {
-  const uint32_t u = std::bit_cast<uint32_t>(f);
-  return f != f ? uint16_t{0x7fc0} : static_cast<uint16_t>((u + 0x7fffu + ((u >> 16) & 1u)) >> 16);
-}
-
-// exp(x) for x <= 0 (the SiLU of negative inputs): Cody-Waite reduction by ln 2 and the degree-6
-// minimax polynomial of the Cephes library's expf (relative error about 1e-7); below -87 it is 0.
-inline float exp_nonpositive(float x) {
-  x = std::max(x, -87.0f);
-  const float n = std::nearbyint(x * 1.44269504088896341f);
-  const float r = x - n * 0.693359375f + n * 2.12194440e-4f;
-  float p = 1.9875691500e-4f;
-  p = p * r + 1.3981999507e-3f;
-  p = p * r + 8.3334519073e-3f;
-  p = p * r + 4.1665795894e-2f;
-  p = p * r + 1.6666665459e-1f;
-  p = p * r + 5.0000001201e-1f;
-  p = p * r * r + r + 1.0f;
-  return p * std::bit_cast<float>((static_cast<int32_t>(n) + 127) << 23);
-}
-
 // x * sigmoid(x), with exp of -|x| only (no overflow): sigmoid(x) = 1 / (1 + e) for x >= 0 and
 // e / (1 + e) for x < 0, where e = exp(-|x|).
-inline float silu(float x) {
-  const float e = exp_nonpositive(-std::fabs(x));
-  const float s = (x >= 0.0f ? 1.0f : e) / (1.0f + e);
-  return x * s;
+U3D_INLINE f32x16 silu(f32x16 x) {
+  const f32x16 magnitude = std::bit_cast<f32x16>(std::bit_cast<u32x16>(x) & 0x7fffffffu);
+  const f32x16 e = exp_nonpositive(-magnitude);
+  return x * ((x >= 0.0f ? splat(1.0f) : e) / (1.0f + e));
 }
 
 U3D_VECTOR_CLONES void add_pixels(const uint16_t* x, int64_t pixels, int64_t channels, float* sums) {
@@ -69,15 +53,28 @@ U3D_VECTOR_CLONES void add_squared_deviations(const uint16_t* x, int64_t pixels,
   }
 }
 
+// y = x * scale + shift per channel, then SiLU if asked; 16 channels at a time, the last ones of a pixel
+// through a padded copy.
 U3D_VECTOR_CLONES void scale_pixels(const uint16_t* x, int64_t pixels, int64_t channels, const float* scale,
                                     const float* shift, bool apply_silu, uint16_t* y) {
+  const auto compute = [&](f32x16 v, int64_t c) {
+    v = v * load(scale + c) + load(shift + c);
+    return apply_silu ? silu(v) : v;
+  };
+  const int64_t full = channels / kWidth * kWidth;
   for (int64_t p = 0; p < pixels; ++p) {
     const uint16_t* in = x + p * channels;
     uint16_t* out = y + p * channels;
-    if (apply_silu) {
-      for (int64_t c = 0; c < channels; ++c) out[c] = float_to_bf16(silu(bf16_to_float(in[c]) * scale[c] + shift[c]));
-    } else {
-      for (int64_t c = 0; c < channels; ++c) out[c] = float_to_bf16(bf16_to_float(in[c]) * scale[c] + shift[c]);
+    for (int64_t c = 0; c < full; c += kWidth) store_bf16(out + c, compute(load_bf16(in + c), c));
+    if (full < channels) {
+      uint16_t values[kWidth] = {}, rounded[kWidth];
+      float s[kWidth] = {}, t[kWidth] = {};
+      std::copy(in + full, in + channels, values);
+      std::copy(scale + full, scale + channels, s);
+      std::copy(shift + full, shift + channels, t);
+      f32x16 v = load_bf16(values) * load(s) + load(t);
+      store_bf16(rounded, apply_silu ? silu(v) : v);
+      std::copy(rounded, rounded + (channels - full), out + full);
     }
   }
 }
