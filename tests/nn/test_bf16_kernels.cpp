@@ -1,6 +1,6 @@
-// The bf16 CPU kernels behind Conv2d, GroupNorm and the attention softmax (nn/layers/onednn_conv.h,
-// nn/layers/group_norm_kernel.h, nn/layers/softmax_kernel.h), against ATen in fp32 or float64 on the
-// same bf16 values.
+// The bf16 CPU kernels behind Conv2d, GroupNorm, the attention softmax (nn/layers/onednn_conv.h,
+// nn/layers/group_norm_kernel.h, nn/layers/softmax_kernel.h) and GEGLU (nn/layers/geglu_kernel.h), against ATen in fp32
+// or float64 on the same bf16 values.
 #include <ATen/Parallel.h>
 #include <gtest/gtest.h>
 
@@ -9,6 +9,7 @@
 
 #include "golden.h"
 #include "nn/layers/attention.h"
+#include "nn/layers/geglu_kernel.h"
 #include "nn/layers/group_norm_kernel.h"
 #include "nn/layers/layers.h"
 #include "nn/layers/softmax_kernel.h"
@@ -235,6 +236,25 @@ TEST(Bf16Kernels, AttentionMatchesFp32OnTheSameValues) {
     EXPECT_EQ(out.scalar_type(), torch::kBFloat16);
     EXPECT_LT(relative_error(out.to(torch::kFloat), expected), 1e-2);
   }
+}
+
+TEST(Bf16Kernels, GegluMatchesFloat64) {
+  torch::NoGradGuard no_grad;
+  torch::manual_seed(17);
+  // 40 gates a row: two vectors and a tail of 8. Gates from -12 to 12: GELU's small negative tail
+  // (about -1e-32 at -12) must keep its relative accuracy.
+  const torch::Tensor hidden = torch::randn({3, 5, 40});
+  const torch::Tensor gate = torch::linspace(-12.0, 12.0, 3 * 5 * 40).reshape({3, 5, 40});
+  const torch::Tensor projected = torch::cat({hidden, gate}, -1).to(torch::kBFloat16);
+  ASSERT_TRUE(geglu_bf16_applies(projected));
+  const torch::Tensor out = geglu_bf16(projected);
+  EXPECT_EQ(out.sizes(), hidden.sizes());
+  const torch::Tensor h = projected.narrow(-1, 0, 40).to(torch::kDouble);
+  const torch::Tensor g = projected.narrow(-1, 40, 40).to(torch::kDouble);
+  // gelu(g) = g/2 * erfc(-g/sqrt 2): through 1 + erf, as ATen computes it, float64 loses the tail below -8.
+  EXPECT_TRUE(within_one_bf16_step(out, h * 0.5 * g * torch::erfc(-g / std::sqrt(2.0))));
+  EXPECT_FALSE(geglu_bf16_applies(projected.narrow(-1, 0, 79)));  // odd and strided
+  EXPECT_THROW(geglu_bf16(torch::zeros({2, 4})), c10::Error);     // fp32
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 #include "nn/layers/transformer_2d.h"
 
+#include "nn/layers/geglu_kernel.h"
+
 #include <algorithm>
 
 namespace u3d::nn {
@@ -19,7 +21,9 @@ GEGLUImpl::GEGLUImpl(int64_t dim_in, int64_t dim_out, const torch::TensorOptions
 }
 
 torch::Tensor GEGLUImpl::forward(const torch::Tensor& x) {
-  auto halves = proj->forward(x).chunk(2, -1);
+  const torch::Tensor projected = proj->forward(x);
+  if (geglu_bf16_applies(projected)) return geglu_bf16(projected);
+  auto halves = projected.chunk(2, -1);
   return halves[0] * torch::gelu(halves[1]);
 }
 
