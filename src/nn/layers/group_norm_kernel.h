@@ -1,6 +1,6 @@
 #pragma once
 // GroupNorm (optionally followed by SiLU) of channels-last bf16 activations in one kernel, for the
-// GroupNorm layer (docs/networks.md, "bf16 convolutions"). The bf16 convolutions return channels-last
+// GroupNorm layer (docs/networks.md, "bf16 kernels"). The bf16 convolutions return channels-last
 // tensors; through ATen each norm of one would convert it to fp32, normalise, convert back and apply
 // SiLU in a fourth pass. Here statistics and scaling are computed in fp32 (the sums of each block of
 // pixels in fp32, the blocks summed in double) from the bf16 values directly, and the result is rounded

@@ -1,6 +1,6 @@
 #pragma once
 // 2-D convolution of bf16 activations on the CPU through oneDNN directly, for the Conv2d layer
-// (docs/networks.md, "bf16 convolutions"). Through ATen (libtorch 1.13) every bf16 convolution reorders
+// (docs/networks.md, "bf16 kernels"). Through ATen (libtorch 1.13) every bf16 convolution reorders
 // its weights into oneDNN's blocked layout on every call and converts the activations to and from a
 // blocked layout too: at full size that was 0.4 s of a 3.3 s UNet forward, and ATen's kernel choice
 // for 2,560 input channels ran at a quarter of the others' speed. Here the weights are reordered once

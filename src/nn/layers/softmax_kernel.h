@@ -1,6 +1,6 @@
 #pragma once
 // softmax(scale * scores) over the last dimension of bf16 attention scores, in place, for
-// multi_head_attention (docs/networks.md, "Speed"). libtorch 1.13's bf16 softmax converts each row to
+// multi_head_attention (docs/networks.md, "bf16 kernels"). libtorch 1.13's bf16 softmax converts each row to
 // fp32 and back in separate passes and calls a general exp: in a full-size bf16 UNet forward at 4,096
 // tokens it took twice as long as the two attention products together. Here each row is read once for
 // its maximum and once for exp and its sum, both in fp32, and rounded to bf16 once (nearest, ties to
