@@ -97,6 +97,28 @@ TEST(Bf16Kernels, ConvolutionFollowsWeightsChangedAfterTheFirstCall) {
   EXPECT_LT(relative_error(conv->forward(x).to(torch::kFloat), reference()), 4e-3);
 }
 
+TEST(Bf16Kernels, ConvolutionWithoutKeptWeightsGivesTheSameValues) {
+  if (!cpu_has_bf16_kernels()) GTEST_SKIP() << "the oneDNN path needs avx512_bf16";
+  torch::NoGradGuard no_grad;
+  torch::manual_seed(18);
+  torch::nn::Sequential model(Conv2d(16, 32, 3, 1, 1, true, torch::TensorOptions()),
+                              Conv2d(32, 32, 3, 1, 1, false, torch::TensorOptions()));
+  randomize_parameters(*model, 0.2);
+  set_precision(*model, Precision::kBf16);
+  const torch::Tensor x = torch::randn({2, 16, 8, 8}).to(torch::kBFloat16);
+  const torch::Tensor kept = model->forward(x);
+  keep_packed_conv_weights(*model, false);
+  // The same kernel on weights reordered for each call: the same values.
+  EXPECT_TRUE(torch::equal(model->forward(x), kept));
+  // Weights changed in place are read again on the next call.
+  auto* first = model[0]->as<Conv2dImpl>();
+  first->weight.neg_();
+  const torch::Tensor changed = model->forward(x);
+  keep_packed_conv_weights(*model, true);
+  EXPECT_TRUE(torch::equal(model->forward(x), changed));
+  EXPECT_FALSE(torch::equal(changed, kept));
+}
+
 TEST(Bf16Kernels, ConvolutionRejectsAChannelMismatch) {
   if (!cpu_has_bf16_kernels()) GTEST_SKIP() << "the oneDNN path needs avx512_bf16";
   torch::NoGradGuard no_grad;

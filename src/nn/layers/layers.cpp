@@ -23,6 +23,13 @@ torch::Tensor Conv2dImpl::forward(const torch::Tensor& x) {
   return torch::conv2d(x, weight, bias, {stride, stride}, {padding, padding});
 }
 
+void Conv2dImpl::keep_packed_weights(bool keep) { onednn_->keep_packed_weights(keep); }
+
+void keep_packed_conv_weights(torch::nn::Module& model, bool keep) {
+  for (const auto& module : model.modules(/*include_self=*/true))
+    if (auto* conv = dynamic_cast<Conv2dImpl*>(module.get())) conv->keep_packed_weights(keep);
+}
+
 GroupNormImpl::GroupNormImpl(int64_t groups_, int64_t channels, double eps_, const torch::TensorOptions& options)
     : groups(groups_), eps(eps_) {
   TORCH_CHECK(channels % groups == 0, "GroupNorm: ", channels, " channels are not divisible into ", groups, " groups");

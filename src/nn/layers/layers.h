@@ -24,6 +24,8 @@ class Conv2dImpl : public torch::nn::Module {
   Conv2dImpl(int64_t in_channels, int64_t out_channels, int64_t kernel, int64_t stride, int64_t padding, bool bias,
              const torch::TensorOptions& options);
   torch::Tensor forward(const torch::Tensor& x);
+  // bf16 on the CPU: whether the packed weights stay between calls (OnednnConv2d::keep_packed_weights).
+  void keep_packed_weights(bool keep);
   torch::Tensor weight, bias;
   int64_t stride, padding;
 
@@ -32,6 +34,9 @@ class Conv2dImpl : public torch::nn::Module {
   std::shared_ptr<OnednnConv2d> onednn_ = std::make_shared<OnednnConv2d>();
 };
 TORCH_MODULE(Conv2d);
+
+// keep_packed_weights(keep) on every Conv2d inside `model`.
+void keep_packed_conv_weights(torch::nn::Module& model, bool keep);
 
 // The norms compute in the dtype of their weights: fp32 weights normalise bf16/fp16 activations in
 // fp32 and return the activations' dtype (nn/precision.h).

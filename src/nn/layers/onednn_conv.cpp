@@ -54,6 +54,7 @@ struct OnednnConv2d::State {
     dnnl::memory weights;
   };
   std::mutex mutex;
+  bool keep_packed = true;
   WeightKey key;
   std::vector<Plan> plans;
   std::vector<Packed> packed;
@@ -100,17 +101,23 @@ struct OnednnConv2d::State {
     }
     size_t index = 0;
     while (index < packed.size() && packed[index].desc != pd.weights_desc()) ++index;
-    if (index == packed.size()) {
-      const torch::Tensor plain = weight.contiguous();
-      dnnl::memory source({weight_dims, DataType::bf16, Tag::oihw}, cpu_engine(), plain.data_ptr());
+    if (keep_packed && index == packed.size()) {
       dnnl::memory target(pd.weights_desc(), cpu_engine());
-      dnnl::stream stream(cpu_engine());
-      dnnl::reorder(source, target).execute(stream, source, target);
-      stream.wait();
+      reorder_weights(weight, target);
       packed.push_back({pd.weights_desc(), target});
     }
     plans.push_back({input, pd, dnnl::convolution_forward(pd), index, output});
     return plans.back();
+  }
+
+  // The plain [out, in, kh, kw] weights into `target`'s layout.
+  static void reorder_weights(const torch::Tensor& weight, dnnl::memory& target) {
+    const torch::Tensor plain = weight.contiguous();
+    dnnl::memory source({{weight.size(0), weight.size(1), weight.size(2), weight.size(3)}, DataType::bf16, Tag::oihw},
+                        cpu_engine(), plain.data_ptr());
+    dnnl::stream stream(cpu_engine());
+    dnnl::reorder(source, target).execute(stream, source, target);
+    stream.wait();
   }
 };
 
@@ -121,6 +128,13 @@ bool OnednnConv2d::applies(const torch::Tensor& x, const torch::Tensor& weight) 
 
 OnednnConv2d::OnednnConv2d() : state_(std::make_unique<State>()) {}
 OnednnConv2d::~OnednnConv2d() = default;
+
+void OnednnConv2d::keep_packed_weights(bool keep) {
+  std::lock_guard<std::mutex> lock(state_->mutex);
+  state_->keep_packed = keep;
+  state_->plans.clear();
+  state_->packed.clear();
+}
 
 torch::Tensor OnednnConv2d::forward(const torch::Tensor& x, const torch::Tensor& weight, const torch::Tensor& bias,
                                     int64_t stride, int64_t padding) {
@@ -136,8 +150,18 @@ torch::Tensor OnednnConv2d::forward(const torch::Tensor& x, const torch::Tensor&
   const auto& pd = plan.pd;
   dnnl::memory src(pd.src_desc(), cpu_engine(), input.data_ptr());
   dnnl::memory dst(pd.dst_desc(), cpu_engine(), out.data_ptr());
-  std::unordered_map<int, dnnl::memory> args{
-      {DNNL_ARG_SRC, src}, {DNNL_ARG_WEIGHTS, state_->packed[plan.packed].weights}, {DNNL_ARG_DST, dst}};
+  // Without kept weights: reordered for this call into a buffer that is freed after it.
+  torch::Tensor weight_buffer;
+  dnnl::memory weights;
+  if (state_->keep_packed) {
+    weights = state_->packed[plan.packed].weights;
+  } else {
+    weight_buffer =
+        torch::empty({static_cast<int64_t>(pd.weights_desc().get_size())}, torch::TensorOptions().dtype(torch::kUInt8));
+    weights = dnnl::memory(pd.weights_desc(), cpu_engine(), weight_buffer.data_ptr());
+    State::reorder_weights(weight, weights);
+  }
+  std::unordered_map<int, dnnl::memory> args{{DNNL_ARG_SRC, src}, {DNNL_ARG_WEIGHTS, weights}, {DNNL_ARG_DST, dst}};
   const torch::Tensor bias_c = bias.defined() ? bias.contiguous() : bias;
   if (bias_c.defined()) args.emplace(DNNL_ARG_BIAS, dnnl::memory(pd.bias_desc(), cpu_engine(), bias_c.data_ptr()));
   // The kernel's work space comes from libtorch's allocator, which keeps freed blocks for reuse

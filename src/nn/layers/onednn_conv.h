@@ -28,6 +28,11 @@ class OnednnConv2d {
   torch::Tensor forward(const torch::Tensor& x, const torch::Tensor& weight, const torch::Tensor& bias, int64_t stride,
                         int64_t padding);
 
+  // Whether the packed weights are kept between calls (the default). Without, every call reorders the
+  // weights into a buffer from libtorch's allocator: slower, but no second copy of the weights stays
+  // resident (the reference UNet of the normal stage, docs/networks.md "bf16 kernels").
+  void keep_packed_weights(bool keep);
+
  private:
   struct State;
   std::unique_ptr<State> state_;
