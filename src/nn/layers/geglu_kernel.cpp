@@ -13,13 +13,7 @@ namespace u3d::nn {
 
 namespace {
 
-using vector_math::exp_nonpositive;
-using vector_math::f32x16;
-using vector_math::kWidth;
-using vector_math::load_bf16;
-using vector_math::splat;
-using vector_math::store_bf16;
-using vector_math::u32x16;
+using namespace vector_math;
 
 // erfc(z) for z >= 0 with a relative error under 1.2e-7 everywhere (the Chebyshev fit of Numerical
 // Recipes' erfcc): t = 1 / (1 + z/2), erfc(z) = t * exp(-z^2 + P(t)). The exponent is never positive,

@@ -14,15 +14,7 @@ namespace u3d::nn {
 
 namespace {
 
-using vector_math::bf16_to_float;
-using vector_math::exp_nonpositive;
-using vector_math::f32x16;
-using vector_math::kWidth;
-using vector_math::load;
-using vector_math::load_bf16;
-using vector_math::splat;
-using vector_math::store_bf16;
-using vector_math::u32x16;
+using namespace vector_math;
 
 // Pixels per block of the statistics: each block's channel sums are accumulated in fp32.
 constexpr int64_t kBlockPixels = 256;

@@ -13,14 +13,7 @@ namespace u3d::nn {
 
 namespace {
 
-using vector_math::exp_nonpositive;
-using vector_math::f32x16;
-using vector_math::kWidth;
-using vector_math::load;
-using vector_math::load_bf16;
-using vector_math::splat;
-using vector_math::store;
-using vector_math::store_bf16;
+using namespace vector_math;
 
 constexpr float kInfinity = std::numeric_limits<float>::infinity();
 constexpr uint16_t kBf16MinusInfinity = 0xff80;
