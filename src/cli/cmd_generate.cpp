@@ -2,7 +2,6 @@
 // the library facade (pipeline/generate.h); this file parses options and prints the summary.
 #include <cstdio>
 #include <fstream>
-#include <nlohmann/json.hpp>
 
 #include "cli/command.h"
 #include "cli/mesh_output_options.h"
@@ -10,6 +9,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "pipeline/generate.h"
+#include "pipeline/summary_json.h"
 
 namespace u3d::cli {
 namespace {
@@ -22,22 +22,6 @@ struct GenerateArgs {
   std::string json_path;
   MeshOutputArgs output;
 };
-
-nlohmann::json summary_json(const GenerateSummary& s) {
-  nlohmann::json j;
-  j["precision"] = nn::precision_name(s.precision);
-  for (const GenerateStageReport& stage : s.stages)
-    j["stages"].push_back({{"name", stage.name},
-                           {"seconds", stage.seconds},
-                           {"peak_memory_mib", stage.peak_memory_mib},
-                           {"resumed", stage.resumed}});
-  j["total_seconds"] = s.total_seconds();
-  const ReconstructSummary& r = s.reconstruction;
-  j["mesh"] = {
-      {"vertices", r.mesh.vertex_count()}, {"faces", r.mesh.face_count()}, {"silhouette_iou", r.silhouette_iou}};
-  for (const auto& path : s.written) j["written"].push_back(path.string());
-  return j;
-}
 
 void run(const GenerateArgs& a) {
   GenerateRequest request = a.request;

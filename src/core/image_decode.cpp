@@ -7,6 +7,7 @@
 
 #include <bit>
 #include <csetjmp>
+#include <cstdint>
 #include <cstring>
 #include <vector>
 
@@ -229,6 +230,58 @@ Image decode_jpeg(const unsigned char* bytes, size_t size, const std::string& wh
     for (int c = 0; c < 3; ++c) image.data[p * 3 + c] = float(k - ((255 - cmyk[c]) * k >> 8)) * k8BitScale;
   }
   return image;
+}
+
+namespace {
+
+uint32_t big_endian(const unsigned char* p, int bytes) {
+  uint32_t value = 0;
+  for (int i = 0; i < bytes; ++i) value = (value << 8) | p[i];
+  return value;
+}
+
+// The frame size of a JPEG: its markers are walked segment by segment (each FF xx followed by a 2-byte
+// length, standalone markers without one) up to the first start-of-frame (C0-CF but C4, C8 and CC).
+ImageSize peek_jpeg_size(const unsigned char* bytes, size_t size, const std::string& what) {
+  size_t at = 2;  // after the start-of-image marker
+  while (at + 4 <= size) {
+    if (bytes[at] != 0xFF) break;
+    const unsigned char marker = bytes[at + 1];
+    if (marker == 0xFF) {  // fill byte
+      ++at;
+      continue;
+    }
+    if (marker == 0x01 || (marker >= 0xD0 && marker <= 0xD7)) {  // no length
+      at += 2;
+      continue;
+    }
+    if (marker == 0xD9 || marker == 0xDA) break;  // end of image, or scan data before any frame
+    const size_t length = big_endian(bytes + at + 2, 2);
+    if (length < 2) break;
+    const bool frame = marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
+    if (frame) {
+      if (at + 9 > size || length < 7) break;
+      return {int(big_endian(bytes + at + 7, 2)), int(big_endian(bytes + at + 5, 2))};
+    }
+    at += 2 + length;
+  }
+  throw Error("cannot decode " + what + ": its JPEG header ends before the image size");
+}
+
+}  // namespace
+
+ImageSize peek_image_size(const unsigned char* bytes, size_t size, const std::string& what) {
+  if (is_png_signature(bytes, size)) {
+    // Signature (8), then the first chunk, which must be IHDR: length (4), type (4), width (4), height (4).
+    require(size >= 24 && std::memcmp(bytes + 12, "IHDR", 4) == 0,
+            "cannot decode " + what + ": its PNG header ends before the image size");
+    const uint32_t width = big_endian(bytes + 16, 4), height = big_endian(bytes + 20, 4);
+    require(width > 0 && height > 0 && width <= 0x7FFFFFFFu && height <= 0x7FFFFFFFu,
+            "cannot decode " + what + ": its PNG header states an invalid size");
+    return {int(width), int(height)};
+  }
+  if (is_jpeg_signature(bytes, size)) return peek_jpeg_size(bytes, size, what);
+  throw Error("cannot decode " + what + (size == 0 ? ": no data" : ": not a PNG or JPEG image"));
 }
 
 Image decode_image(const unsigned char* bytes, size_t size, const std::string& what) {

@@ -31,6 +31,15 @@ Image decode_png(const unsigned char* bytes, size_t size, const std::string& wha
 // ends early decodes with a warning, as libjpeg fills the rest in. Images over 2^30 pixels are refused.
 Image decode_jpeg(const unsigned char* bytes, size_t size, const std::string& what);
 
+// The width and height a PNG (its IHDR chunk) or a JPEG (its first start-of-frame segment) states, read
+// without decoding anything else, so that a caller can refuse an image too large to decode before its
+// pixels are allocated. An Error naming `what` when the bytes are neither or the header is cut short.
+struct ImageSize {
+  int width = 0;
+  int height = 0;
+};
+ImageSize peek_image_size(const unsigned char* bytes, size_t size, const std::string& what);
+
 // Decodes PNG or JPEG bytes, told apart by their signature (load_image for files, the glTF reader for
 // embedded textures). Anything else is an Error "cannot decode <what>: not a PNG or JPEG image".
 Image decode_image(const unsigned char* bytes, size_t size, const std::string& what);

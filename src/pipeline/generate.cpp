@@ -21,10 +21,6 @@ namespace fs = std::filesystem;
 
 enum Stage { kPrepare, kMultiView, kRefine, kUpscale, kNormals, kReconstruct, kStageCount };
 
-// Limits on the photo: smaller has too little of the object to draw four views from; larger is
-// certainly not an object photo the networks can use (they see it at most at 2048 px).
-constexpr int kMinPhotoSide = 64;
-constexpr int kMaxPhotoSide = 8192;
 constexpr int kRefinedSize = 512;
 constexpr int kSuperResolveMaxWidth =
     int(nn::kSuperResolveMaxWidth);  // the views after refinement (or its replacement, a Lanczos resize)

@@ -26,6 +26,11 @@
 
 namespace u3d {
 
+// Limits on the photo: smaller has too little of the object to draw four views from; larger is
+// certainly not an object photo the networks can use (they see it at most at 2048 px).
+inline constexpr int kMinPhotoSide = 64;
+inline constexpr int kMaxPhotoSide = 8192;
+
 struct GenerateRequest {
   std::filesystem::path image;   // the photo (PNG/JPEG; RGBA with the object on transparency, or not); not
                                  // read, and may be empty, when resuming from_intermediates

@@ -349,3 +349,28 @@ TEST(ImageDecode, LibjpegMessagesComeInTheProjectsWords) {
   EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
   fs::remove_all(dir);
 }
+
+// peek_image_size reads the size from the header alone: the size the decoders give for PNG and JPEG
+// (baseline and progressive), a size no decoder could allocate from a header-only file, and an Error for
+// headers cut short or other formats.
+TEST(ImageDecode, PeekImageSizeReadsTheHeaderAlone) {
+  cv::Mat colour(37, 53, CV_8UC3);
+  cv::randu(colour, 0, 256);
+  for (const std::string ext : {".png", ".jpg"})
+    for (int progressive : {0, 1}) {
+      std::vector<unsigned char> bytes;
+      cv::imencode(ext, colour, bytes, {cv::IMWRITE_JPEG_PROGRESSIVE, progressive});
+      const ImageSize size = peek_image_size(bytes.data(), bytes.size(), "test" + ext);
+      EXPECT_EQ(size.width, 53) << ext;
+      EXPECT_EQ(size.height, 37) << ext;
+      const std::string cut(bytes.begin(), bytes.begin() + 20);
+      EXPECT_THROW(peek_image_size(reinterpret_cast<const unsigned char*>(cut.data()), cut.size(), "cut" + ext), Error)
+          << ext;
+    }
+  const std::string huge = "\x89PNG\r\n\x1a\n" + chunk("IHDR", be32(100000) + be32(100000) + std::string("\x08\x06\0\0\0", 5));
+  const ImageSize size = peek_image_size(reinterpret_cast<const unsigned char*>(huge.data()), huge.size(), "huge.png");
+  EXPECT_EQ(size.width, 100000);
+  EXPECT_EQ(size.height, 100000);
+  const std::string gif = "GIF89a\x01\x00\x01\x00";
+  EXPECT_THROW(peek_image_size(reinterpret_cast<const unsigned char*>(gif.data()), gif.size(), "x.gif"), Error);
+}
