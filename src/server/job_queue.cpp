@@ -36,6 +36,7 @@ void JobQueue::submit(const std::shared_ptr<Job>& job) {
                       " jobs waiting); try again when one has finished");
     jobs_[job->id()] = job;
     waiting_.push_back(job);
+    job->add_event("queue", {{"position", waiting_.size()}});
   }
   work_ready_.notify_one();
 }
@@ -70,9 +71,14 @@ void JobQueue::cancel(Job& job) {
   if (it != waiting_.end()) {
     waiting_.erase(it);
     job.set_state(JobState::Cancelled);
+    announce_positions();
   } else if (running_.get() == &job) {
     job.request_cancel();
   }
+}
+
+void JobQueue::announce_positions() {
+  for (size_t i = 0; i < waiting_.size(); ++i) waiting_[i]->add_event("queue", {{"position", i + 1}});
 }
 
 void JobQueue::wake_all() const {
@@ -90,6 +96,7 @@ void JobQueue::work() {
       job = running_ = waiting_.front();
       waiting_.pop_front();
       job->set_state(JobState::Running);
+      announce_positions();
     }
     try {
       runner_(*job);

@@ -2,7 +2,8 @@
 // The jobs of `unique3d serve` and the one worker thread that runs them in the order they came: a job
 // uses every core, so two at once would only slow both. At most `max_waiting` jobs wait behind the
 // running one; a submission beyond that is refused (QueueFull) rather than left to wait for hours.
-// Jobs stay known (status, events, files) until the server stops.
+// Jobs stay known (status, events, files) until the server stops. A waiting job gets a "queue" event
+// with its place in the line (1: next) whenever that changes.
 #include <cstddef>
 #include <deque>
 #include <functional>
@@ -51,6 +52,7 @@ class JobQueue {
 
  private:
   void work();
+  void announce_positions();  // with mutex_ held
 
   const size_t max_waiting_;
   const JobRunner runner_;

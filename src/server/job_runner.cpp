@@ -139,8 +139,7 @@ nlohmann::json job_summary(nlohmann::json summary, const fs::path& folder) {
   return summary;
 }
 
-void run(Job& job, JobProgress& progress) {
-  const JobSpec& spec = job.spec();
+void run(Job& job, const JobSpec& spec, JobProgress& progress) {
   const fs::path result = job_result_dir(job.folder());
   fs::create_directories(result);
   const Mesh* mesh = nullptr;
@@ -175,10 +174,12 @@ void run(Job& job, JobProgress& progress) {
 
 }  // namespace
 
-void run_job(Job& job) {
+void run_job(Job& job) { run_job_as(job, job.spec()); }
+
+void run_job_as(Job& job, const JobSpec& spec) {
   JobProgress progress(job);
   try {
-    run(job, progress);
+    run(job, spec, progress);
   } catch (...) {
     // A failed or cancelled job keeps nothing: no result, no intermediates, no input.
     std::error_code ec;

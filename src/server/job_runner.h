@@ -22,4 +22,9 @@ std::filesystem::path job_mesh_path(const std::filesystem::path& folder);
 // Runs `job` to its end (JobRunner of server/job_queue.h).
 void run_job(Job& job);
 
+// The same with `spec` in place of the job's own (its folder, events and cancellation stay the job's):
+// for callers that set what the options a client may send cannot, such as the tests, which run the tiny
+// stand-in networks at their small sizes.
+void run_job_as(Job& job, const JobSpec& spec);
+
 }  // namespace u3d::server
