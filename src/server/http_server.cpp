@@ -161,7 +161,7 @@ struct Server::Impl {
 
   // Before a request's body is read: a body larger than the limit is refused at once (httplib would read
   // and discard it all first), and so are requests meant for another host (a page of another site that
-  // rebound its name to this address) and posts from pages of other origins.
+  // rebound its name to this address).
   httplib::Server::HandlerResponse screen(const httplib::Request& req, httplib::Response& res) {
     if (req.has_header("Content-Length")) {
       const std::string length = req.get_header_value("Content-Length");
@@ -178,14 +178,20 @@ struct Server::Impl {
       send_error(res, 403, "this server answers requests for localhost only (Host: " + host + ")");
       return httplib::Server::HandlerResponse::Handled;
     }
-    if (req.method == "POST" && req.has_header("Origin") && req.get_header_value("Origin") != "http://" + host) {
-      send_error(res, 403, "posts from pages of other sites are refused (Origin: " + req.get_header_value("Origin") + ")");
-      return httplib::Server::HandlerResponse::Handled;
-    }
     return httplib::Server::HandlerResponse::Unhandled;
   }
 
+  // A post from a page of another site (a form it submits here) is refused; checked in the handlers,
+  // after the body is read, so that the client gets the answer rather than a broken connection.
+  bool from_another_site(const httplib::Request& req, httplib::Response& res) {
+    if (!req.has_header("Origin") || req.get_header_value("Origin") == "http://" + req.get_header_value("Host"))
+      return false;
+    send_error(res, 403, "posts from pages of other sites are refused (Origin: " + req.get_header_value("Origin") + ")");
+    return true;
+  }
+
   void submit(const httplib::Request& req, httplib::Response& res) {
+    if (from_another_site(req, res)) return;
     if (!req.is_multipart_form_data())
       return send_error(res, 415,
                         "send a job as multipart/form-data: the view set's PNGs (or one zip) as 'views', or a photo as "
@@ -291,6 +297,7 @@ struct Server::Impl {
   }
 
   void cancel(const httplib::Request& req, httplib::Response& res) {
+    if (from_another_site(req, res)) return;
     std::shared_ptr<Job> job = job_of(req, res);
     if (!job) return;
     if (job->finished())
@@ -363,7 +370,11 @@ struct Server::Impl {
   }
 };
 
-Server::Server(ServerOptions options, JobRunner runner) : impl_(std::make_unique<Impl>(std::move(options), std::move(runner))) {}
+Server::Server(ServerOptions options, JobRunner runner) {
+  // A client that hangs up must not end the process: a write to its socket then fails with EPIPE.
+  signal(SIGPIPE, SIG_IGN);
+  impl_ = std::make_unique<Impl>(std::move(options), std::move(runner));
+}
 
 Server::~Server() { stop(); }
 
