@@ -33,17 +33,7 @@ class Generate : public ::testing::Test {
     r.output = *dir / output;
     r.network.models = *dir / "models";
     r.network.precision = nn::Precision::kFp32;
-    r.refine_options.size = 64;
-    r.refine_options.steps = 10;  // strength 0.2: the last 2 run
-    r.multiview.size = 32;
-    r.multiview.steps = 2;
-    r.normals.size = 32;
-    r.normals.steps = 2;
-    r.reconstruct.coarse.steps = 5;
-    r.reconstruct.refine.steps = 5;
-    // The tiny random networks draw noise, whose masks disagree: the silhouette fit would run its
-    // 256^3 grid on every reconstruction here (it has its own tests in tests/isomer).
-    r.reconstruct.silhouette_fit.enabled = false;
+    testing::use_tiny_sizes(r);
     return r;
   }
   static fs::path* dir;

@@ -1,11 +1,12 @@
 #pragma once
 // A --models folder in the official layout (pipeline/model_folder.h) made of the tiny golden models of
 // tests/data/nn (every stage: multi-view, refinement, Real-ESRGAN, normals, background removal), and a
-// small object photo, for tests of the network stages and commands.
+// small object photo, and the sizes they run at, for tests of the network stages and commands.
 #include <filesystem>
 
 #include "core/image.h"
 #include "nn/golden.h"
+#include "pipeline/generate.h"
 #include "nn/refine_folders.h"
 
 namespace u3d::testing {
@@ -21,6 +22,21 @@ inline void write_tiny_model_folder(const std::filesystem::path& models) {
                             {golden_dir("realesrgan_tiny") / "rrdbnet_tiny_op17.onnx", "realesrgan-x4.onnx"},
                             {golden_dir("u2net_tiny") / "u2net_div8" / "u2net_div8_op17.onnx", "u2net.onnx"}});
   nn::test::write_tiny_refine_folders({models / "stable-diffusion-v1-5", models, models / "IP-Adapter"});
+}
+
+// The small sizes and few steps the tiny networks run at in the tests (2 denoising steps each).
+inline void use_tiny_sizes(GenerateRequest& r) {
+  r.refine_options.size = 64;
+  r.refine_options.steps = 10;  // strength 0.2: the last 2 run
+  r.multiview.size = 32;
+  r.multiview.steps = 2;
+  r.normals.size = 32;
+  r.normals.steps = 2;
+  r.reconstruct.coarse.steps = 5;
+  r.reconstruct.refine.steps = 5;
+  // The tiny random networks draw noise, whose masks disagree: the silhouette fit would run its
+  // 256^3 grid on every reconstruction here (it has its own tests in tests/isomer).
+  r.reconstruct.silhouette_fit.enabled = false;
 }
 
 // A 96 px object photo: a disk with a vertical colour ramp on a transparent background.

@@ -10,17 +10,10 @@
 namespace u3d::server::test {
 namespace {
 
-// What the client's options cannot set: the tiny networks' sizes (as tests/pipeline/test_generate.cpp).
+// What the client's options cannot set: the tiny networks' sizes.
 void run_tiny(Job& job) {
   JobSpec spec = job.spec();
-  GenerateRequest& r = spec.generate;
-  r.refine_options.size = 64;
-  r.refine_options.steps = 10;
-  r.multiview.size = 32;
-  r.normals.size = 32;
-  r.reconstruct.coarse.steps = 5;
-  r.reconstruct.refine.steps = 5;
-  r.reconstruct.silhouette_fit.enabled = false;
+  u3d::testing::use_tiny_sizes(spec.generate);
   run_job_as(job, spec);
 }
 
