@@ -149,13 +149,18 @@ TEST_F(Generate, NeedsAPhotoUnlessItResumes) {
 }
 
 TEST_F(Generate, Takes16BitPhotos) {
-  // A 16-bit PNG is read at full precision and handed to the networks as 8-bit values.
+  // A 16-bit PNG is read at full precision and handed to the networks as 8-bit values: the same photo
+  // in 16 bits gives the 8-bit photo's front image, from which every later stage starts.
   save_image(load_image(*dir / "photo.png"), *dir / "photo16.png", /*bit_depth=*/16);
   GenerateRequest r = request("from16.glb");
   r.image = *dir / "photo16.png";
   r.refine = false;
+  r.keep_intermediates = *dir / "kept16";
   generate(r);
   EXPECT_GT(read_mesh(*dir / "from16.glb").face_count(), 0u);
+  NetworkStageSummary prepare;
+  const Image from_8_bits = run_prepare_stage(load_image(*dir / "photo.png"), r.network, prepare);
+  EXPECT_EQ(load_image(*dir / "kept16" / "front.png").data, from_8_bits.data);
 }
 
 TEST_F(Generate, TakesGreyscalePhotos) {
