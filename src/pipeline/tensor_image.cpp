@@ -22,8 +22,12 @@ torch::Tensor image_to_uint8(const Image& image) {
 }
 
 Image tensor_to_image(const torch::Tensor& hwc) {
-  torch::Tensor t =
-      hwc.scalar_type() == torch::kUInt8 ? hwc.to(torch::kFloat).div(255.f) : hwc.to(torch::kFloat).clamp(0, 1);
+  // 8-bit values times float(1 / 255), as the PNG and JPEG decoders scale them (core/image_decode.cpp): an
+  // image read back from a file it was saved to is then the same to the bit, so a run resumed from kept
+  // intermediates gives the same output as one that never stopped (dividing by 255 differs in the last
+  // bit for about one value in five).
+  torch::Tensor t = hwc.scalar_type() == torch::kUInt8 ? hwc.to(torch::kFloat).mul(float(1.0 / 255.0))
+                                                       : hwc.to(torch::kFloat).clamp(0, 1);
   t = t.contiguous();
   Image image(int(t.size(1)), int(t.size(0)), int(t.size(2)));
   std::memcpy(image.data.data(), t.data_ptr<float>(), image.data.size() * sizeof(float));

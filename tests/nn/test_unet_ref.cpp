@@ -5,6 +5,7 @@
 #include "golden.h"
 #include "nn/models/unet_reference.h"
 #include "nn/precision.h"
+#include "required_skip.h"
 
 namespace u3d::nn {
 namespace {
@@ -79,7 +80,7 @@ TEST_F(UNetRef, GroupsOfSamplesShareOneCondition) {
 }
 
 TEST_F(UNetRef, Bf16StaysCloseToTheReference) {
-  if (!cpu_has_bf16_kernels()) GTEST_SKIP() << "bf16 tolerances assume native bf16 kernels (avx512_bf16)";
+  U3D_SKIP_UNLESS_BF16_KERNELS();
   torch::NoGradGuard no_grad;
   set_precision(*model->unet, Precision::kBf16);  // converts the registered reference UNet too
   torch::Tensor out = model->forward(in["sample"], in["timestep"], in["encoder_hidden_states"], in["condition_latents"]);

@@ -11,6 +11,7 @@
 #include "golden.h"
 #include "nn/precision.h"
 #include "nn/schedulers/noise_source.h"
+#include "required_skip.h"
 
 namespace u3d::nn {
 namespace {
@@ -67,7 +68,7 @@ TEST_F(MultiViewFolder, ReproducesTheOfficialSeededRuns) {
 }
 
 TEST_F(MultiViewFolder, Bf16StaysClose) {
-  if (!cpu_has_bf16_kernels()) GTEST_SKIP() << "bf16 tolerances assume native bf16 kernels (avx512_bf16)";
+  U3D_SKIP_UNLESS_BF16_KERNELS();
   auto model = MultiViewModel::load(root, Precision::kBf16);
   EXPECT_RELATIVE_TO_GOLDEN(run_golden(*model), golden_tensors("unet_mv", "outputs")["pipe.images"], 2e-2);
 }

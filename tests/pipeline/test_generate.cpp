@@ -1,10 +1,13 @@
 // `generate` end to end on the tiny golden models at a small size (every stage, refinement included): a
-// mesh file and every stage's intermediates; resuming from each stage's intermediates; the photo checks.
+// mesh file and every stage's intermediates; resuming from each stage's intermediates gives the same mesh
+// file; a cancelled run keeps its completed stages; the photo checks.
 #include "pipeline/generate.h"
 
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <iterator>
+#include <string>
 
 #include "core/synthetic_views.h"
 #include "io/mesh_io.h"
@@ -40,6 +43,11 @@ class Generate : public ::testing::Test {
 };
 fs::path* Generate::dir = nullptr;
 
+std::string file_bytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
 TEST_F(Generate, WritesTheMeshAndEveryStagesIntermediatesAndResumesFromThem) {
   GenerateRequest r = request("mesh.glb");
   r.keep_intermediates = *dir / "kept";
@@ -48,7 +56,10 @@ TEST_F(Generate, WritesTheMeshAndEveryStagesIntermediatesAndResumesFromThem) {
   EXPECT_GT(read_mesh(*dir / "mesh.glb").face_count(), 0u);
   ASSERT_EQ(s.stages.size(), generate_stage_names().size());
   for (const auto& stage : s.stages) EXPECT_FALSE(stage.resumed) << stage.name;
-  EXPECT_TRUE(fs::exists(*dir / "kept" / "front.png"));
+  // front.png is the prepare stage's image of the photo.
+  NetworkStageSummary prepare;
+  const Image prepared = run_prepare_stage(load_image(r.image), r.network, prepare);
+  EXPECT_EQ(load_image(*dir / "kept" / "front.png").data, prepared.data);
   for (const char* folder : {"multiview", "refined", "upscaled", "views"})
     EXPECT_TRUE(fs::exists(*dir / "kept" / folder / "left_rgb.png")) << folder;
   EXPECT_TRUE(fs::exists(*dir / "kept" / "views" / "left_normal.png"));
@@ -77,12 +88,42 @@ TEST_F(Generate, WritesTheMeshAndEveryStagesIntermediatesAndResumesFromThem) {
               std::string::npos)
         << messages.seen.front();
     EXPECT_EQ(messages.seen.front().find("is not read") != std::string::npos, removed % 2 == 1) << messages.seen.front();
-    EXPECT_TRUE(fs::exists(*dir / "resumed.glb"));
-    size_t resumed = 0;
-    for (const auto& stage : rs.stages) resumed += stage.resumed;
-    EXPECT_GE(resumed, 1u);
+    // Exactly the stages before the removed folder's come from the folder, and the mesh is the one the
+    // uninterrupted run wrote, byte for byte.
+    const size_t kept_stages = later.size() - removed;
+    ASSERT_EQ(rs.stages.size(), generate_stage_names().size());
+    for (size_t i = 0; i < rs.stages.size(); ++i) EXPECT_EQ(rs.stages[i].resumed, i < kept_stages) << rs.stages[i].name;
+    EXPECT_TRUE(file_bytes(*dir / "resumed.glb") == file_bytes(*dir / "mesh.glb")) << "resumed after " << kept_stages;
     fs::remove(*dir / "resumed.glb");
   }
+}
+
+// Cancelled during the multi-view model's denoising: the run ends with Cancelled, writes no mesh and
+// keeps the completed prepare stage, from which a later run resumes.
+TEST_F(Generate, CancelledDuringDenoisingKeepsTheCompletedStages) {
+  struct CancelAtDenoising : ProgressListener {
+    int steps = 0;
+    void on_event(const ProgressEvent& e) override {
+      if (e.kind == ProgressEvent::Kind::Step && e.text == "denoise") ++steps;
+    }
+    bool cancel_requested() override { return steps > 0; }
+  };
+  GenerateRequest r = request("cancelled.glb");
+  r.keep_intermediates = *dir / "kept_cancelled";
+  CancelAtDenoising cancel;
+  EXPECT_THROW(generate(r, &cancel), Cancelled);
+  EXPECT_EQ(cancel.steps, 1);
+  EXPECT_FALSE(fs::exists(*dir / "cancelled.glb"));
+  EXPECT_TRUE(fs::exists(*dir / "kept_cancelled" / "front.png"));
+  EXPECT_FALSE(fs::exists(*dir / "kept_cancelled" / "multiview"));
+
+  GenerateRequest resume = request("cancelled.glb");
+  resume.image.clear();
+  resume.from_intermediates = *dir / "kept_cancelled";
+  const GenerateSummary s = generate(resume);
+  EXPECT_TRUE(fs::exists(*dir / "cancelled.glb"));
+  ASSERT_EQ(s.stages.size(), generate_stage_names().size());
+  for (size_t i = 0; i < s.stages.size(); ++i) EXPECT_EQ(s.stages[i].resumed, i == 0) << s.stages[i].name;
 }
 
 TEST_F(Generate, NeedsAPhotoUnlessItResumes) {
@@ -98,13 +139,18 @@ TEST_F(Generate, NeedsAPhotoUnlessItResumes) {
 }
 
 TEST_F(Generate, Takes16BitPhotos) {
-  // A 16-bit PNG is read at full precision and handed to the networks as 8-bit values.
+  // A 16-bit PNG is read at full precision and handed to the networks as 8-bit values: the same photo
+  // in 16 bits gives the 8-bit photo's front image, from which every later stage starts.
   save_image(load_image(*dir / "photo.png"), *dir / "photo16.png", /*bit_depth=*/16);
   GenerateRequest r = request("from16.glb");
   r.image = *dir / "photo16.png";
   r.refine = false;
+  r.keep_intermediates = *dir / "kept16";
   generate(r);
   EXPECT_GT(read_mesh(*dir / "from16.glb").face_count(), 0u);
+  NetworkStageSummary prepare;
+  const Image from_8_bits = run_prepare_stage(load_image(*dir / "photo.png"), r.network, prepare);
+  EXPECT_EQ(load_image(*dir / "kept16" / "front.png").data, from_8_bits.data);
 }
 
 TEST_F(Generate, TakesGreyscalePhotos) {
