@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Installs dependencies, builds, and runs the whole test suite (ctest), then every file reader's fuzz
-# target for a short seeded run (scripts/fuzz.sh; docs/architecture.md, "Fuzzing").
+# Installs dependencies, builds, and runs the whole test suite (ctest), the Python module's tests
+# (pytest, scripts/test_python.sh), then every file reader's fuzz target for a short seeded run
+# (scripts/fuzz.sh; docs/architecture.md, "Fuzzing").
 #   scripts/test.sh               the above, in build/ (what CI runs)
 #   scripts/test.sh --sanitize    the test suite built with ASan and UBSan in build-asan/ instead
 #                                 (docs/architecture.md, "Sanitizers"); no fuzzing
@@ -25,4 +26,5 @@ bash scripts/build.sh
 cd build
 ctest --output-on-failure --parallel "$(nproc)"
 cd "$root"
+bash scripts/test_python.sh
 FUZZ_SEED=1 bash scripts/fuzz.sh 20
