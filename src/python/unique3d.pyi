@@ -93,8 +93,9 @@ class Mesh:
         """N x 3 sRGB colours in [0, 1], or None."""
     @property
     def summary(self) -> Optional[dict[str, Any]]:
-        """The run's summary (topology, colouring, texture, silhouette IoU, timings), as
-        ``unique3d generate --json`` writes its "mesh" part; None for a mesh read from a file."""
+        """The summary of the run that made it: {"mesh": {vertices, faces, topology, silhouette_iou, ...},
+        "colouring", "texture", "timings", "total_seconds", "written"} (docs/server.md lists the fields);
+        None for a mesh read from a file."""
     def save(self, path: PathLike, *, texture_format: Literal["png", "jpg"] = "png") -> None:
         """Writes GLB, OBJ or PLY by the extension, atomically."""
 
