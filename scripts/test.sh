@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# Installs dependencies, builds, and runs the whole test suite (ctest), then every file reader's fuzz
-# target for a short seeded run (scripts/fuzz.sh; docs/architecture.md, "Fuzzing").
+# Installs dependencies, builds, and runs the whole test suite (ctest), the Python module's tests
+# (pytest, scripts/test_python.sh), then every file reader's fuzz target for a short seeded run
+# (scripts/fuzz.sh; docs/architecture.md, "Fuzzing").
 #   scripts/test.sh               the above, in build/ (what CI runs)
 #   scripts/test.sh --sanitize    the test suite built with ASan and UBSan in build-asan/ instead
-#                                 (docs/architecture.md, "Sanitizers"); no fuzzing
+#                                 (docs/architecture.md, "Sanitizers"); no pytest, no fuzzing
 # The output ends with one block saying how many tests skipped and why (scripts/skipped_tests.sh).
 # Tests that skip where a machine lacks something fail instead where it has it
 # (tests/nn/required_skip.h): bf16 tests on a CPU with avx512_bf16, the real-ISNet test once
@@ -32,8 +33,9 @@ rm -f "$build/ctest-junit.xml"
 status=0
 (cd "$build" && ctest --output-on-failure --parallel "$(nproc)" --output-junit "$root/$build/ctest-junit.xml") ||
   status=$?
-if [ "$build" = build ] && [ $status -eq 0 ]; then
-  FUZZ_SEED=1 bash scripts/fuzz.sh 20 || status=$?
+if [ "$build" = build ]; then
+  bash scripts/test_python.sh || status=$?
+  if [ $status -eq 0 ]; then FUZZ_SEED=1 bash scripts/fuzz.sh 20 || status=$?; fi
 fi
 bash scripts/skipped_tests.sh "$build/ctest-junit.xml"
 exit $status

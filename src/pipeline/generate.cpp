@@ -237,7 +237,7 @@ const std::vector<std::string>& generate_stage_names() {
 GenerateSummary generate(const GenerateRequest& request, ProgressListener* listener) {
   std::optional<ProgressScope> scope;
   if (listener) scope.emplace(listener);
-  check_mesh_output(request.output);
+  if (!request.output.empty()) check_mesh_output(request.output);
   require(request.multiview.steps >= 1 && request.normals.steps >= 1, "denoising steps must be at least 1");
 
   // Where to start: after the last stage whose outputs are all in from_intermediates.

@@ -34,7 +34,7 @@ inline constexpr int kMaxPhotoSide = 8192;
 struct GenerateRequest {
   std::filesystem::path image;   // the photo (PNG/JPEG; RGBA with the object on transparency, or not); not
                                  // read, and may be empty, when resuming from_intermediates
-  std::filesystem::path output;  // .glb, .obj or .ply
+  std::filesystem::path output;  // .glb, .obj or .ply; empty: none written (the summary holds the mesh)
   NetworkOptions network;
   bool refine = true;                        // false: the views are resized instead of refined
   std::filesystem::path keep_intermediates;  // empty: none written

@@ -22,6 +22,13 @@ std::filesystem::path with_suffix(const std::filesystem::path& output, const std
   return output.parent_path() / (output.stem().string() + suffix);
 }
 
+void check_request_output(const ReconstructRequest& request) {
+  if (request.output.empty())
+    require(!request.previews, "previews need an output mesh file (they are written beside it)");
+  else
+    check_mesh_output(request.output);
+}
+
 }  // namespace
 
 double ReconstructSummary::total_seconds() const {
@@ -41,7 +48,7 @@ void check_mesh_output(const std::filesystem::path& out) {
 ReconstructSummary reconstruct_folder(const ReconstructRequest& request, ProgressListener* listener) {
   std::optional<ProgressScope> scope;
   if (listener) scope.emplace(listener);
-  check_mesh_output(request.output);
+  check_request_output(request);
   StageTimer load_timer("loading views");
   const ViewSet views = load_view_set(request.views_dir, request.normal_space);
   const double load_seconds = load_timer.finish();
@@ -55,7 +62,7 @@ ReconstructSummary reconstruct_view_set(const ViewSet& views, const ReconstructR
   std::optional<ProgressScope> scope;
   if (listener) scope.emplace(listener);
   const std::filesystem::path& out = request.output;
-  check_mesh_output(out);
+  check_request_output(request);
   ReconstructSummary summary;
   ReconstructResult result = reconstruct(views, request.options);
   summary.timings.insert(summary.timings.end(), result.timings.begin(), result.timings.end());
@@ -74,6 +81,7 @@ ReconstructSummary reconstruct_view_set(const ViewSet& views, const ReconstructR
     preview_seconds = preview_timer.finish();
   }
 
+  if (out.empty()) return summary;
   StageTimer write_timer("writing " + out.string());
   if (request.official_output_scale) {
     Mesh scaled = summary.mesh;

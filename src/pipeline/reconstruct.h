@@ -22,9 +22,9 @@ inline constexpr float kOfficialOutputScale = 0.675f;
 struct ReconstructRequest {
   std::filesystem::path views_dir;  // front/right/back/left _rgb.png and _normal.png (core/view_set.h)
   NormalSpace normal_space = NormalSpace::World;
-  std::filesystem::path output;                       // .glb, .obj or .ply
-  bool previews = false;                              // also <stem>_views.png (the four views) and <stem>_turntable.png
-  bool official_output_scale = false;                 // write the mesh scaled by kOfficialOutputScale
+  std::filesystem::path output;        // .glb, .obj or .ply; empty: nothing is written (the summary holds the mesh)
+  bool previews = false;               // also <stem>_views.png (the four views) and <stem>_turntable.png; needs output
+  bool official_output_scale = false;  // write the mesh scaled by kOfficialOutputScale
   TextureFormat texture_format = TextureFormat::Png;  // of the baked texture (options.color_mode Texture)
   ReconstructOptions options;
 };
@@ -41,7 +41,7 @@ struct ReconstructSummary {
 };
 
 // Checks the request and the view set before any work (Error naming the file or value), reconstructs,
-// and writes the outputs only after everything else succeeded (each atomically). Progress and
+// and writes the outputs (if any) only after everything else succeeded (each atomically). Progress and
 // cancellation go through `listener` (none: the thread's current one).
 ReconstructSummary reconstruct_folder(const ReconstructRequest& request, ProgressListener* listener = nullptr);
 

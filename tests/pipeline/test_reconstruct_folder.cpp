@@ -101,5 +101,24 @@ TEST(ReconstructFolder, RejectsABadOutputBeforeAnyWork) {
   EXPECT_TRUE(recorder.events.empty());
 }
 
+TEST(ReconstructFolder, WithoutAnOutputWritesNothingAndKeepsTheMesh) {
+  ReconstructRequest request = sphere_request("facade_no_output");
+  const std::filesystem::path folder = request.output.parent_path();
+  request.output.clear();
+  const ReconstructSummary summary = reconstruct_folder(request);
+  EXPECT_GT(summary.mesh.face_count(), 0u);
+  EXPECT_TRUE(summary.written.empty());
+  EXPECT_TRUE(std::none_of(summary.timings.begin(), summary.timings.end(),
+                           [](const StageTiming& t) { return t.name == "write"; }));
+  std::vector<std::filesystem::path> files;
+  for (const auto& entry : std::filesystem::directory_iterator(folder)) files.push_back(entry.path().filename());
+  EXPECT_EQ(files, std::vector<std::filesystem::path>{"views"});
+  // Previews are written beside the mesh file, so they need one.
+  request.previews = true;
+  Recorder recorder;
+  EXPECT_THROW(reconstruct_folder(request, &recorder), Error);
+  EXPECT_TRUE(recorder.events.empty());
+}
+
 }  // namespace
 }  // namespace u3d
