@@ -15,9 +15,16 @@ Mesh stage_initial_mesh(const ViewSet& views, const ReconstructOptions& options,
   if (options.sphere_init) return sphere_initial_mesh();
   Mesh initial = build_initial_mesh(views, options.init);
   const SilhouetteFitOptions& fit = options.silhouette_fit;
-  if (!fit.enabled || min_silhouette_iou(initial, views) >= fit.initial_min_iou) return initial;
+  if (!fit.enabled) return initial;
+  const size_t faces = size_t(options.init.target_faces);
+  // A mesh that misses most of a mask is fitted to the masks; one with more pieces than the masks'
+  // hull gives way to that hull.
+  std::optional<Mesh> replaced = min_silhouette_iou(initial, views) < fit.initial_min_iou
+                                     ? fit_to_silhouettes(initial, views, fit.resolution, faces)
+                                     : hull_for_extra_pieces(initial, views, fit, faces);
+  if (!replaced) return initial;
   if (fitted) *fitted = true;
-  return fit_to_silhouettes(initial, views, fit.resolution, size_t(options.init.target_faces));
+  return std::move(*replaced);
 }
 
 size_t final_face_count(const ReconstructOptions& options) {
