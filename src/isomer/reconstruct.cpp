@@ -70,9 +70,13 @@ ReconstructResult reconstruct(const ViewSet& views, const ReconstructOptions& op
   Mesh smoothed;
   timed("smooth and subdivide", [&] { smoothed = fitted ? mesh : smooth_and_subdivide(mesh, options.cleanup); });
   const SilhouetteFitOptions& fit = options.silhouette_fit;
+  bool grid_surface = fitted;  // a surface from the fit's grid, which can leave crumbs
   if (fit.enabled && (options.run_coarse || options.run_refine))
     timed("silhouette fit", [&] {
-      if (std::optional<Mesh> fitted_mesh = fit_optimised_mesh(mesh, smoothed, views, fit)) smoothed = std::move(*fitted_mesh);
+      if (std::optional<Mesh> fitted_mesh = fit_optimised_mesh(mesh, smoothed, views, fit)) {
+        smoothed = std::move(*fitted_mesh);
+        grid_surface = true;
+      }
     });
   mesh = std::move(smoothed);
   const size_t faces = final_face_count(options);
@@ -83,6 +87,9 @@ ReconstructResult reconstruct(const ViewSet& views, const ReconstructOptions& op
         progress("warning: decimation stopped at " + std::to_string(mesh.faces.size()) + " faces (asked for " +
                  std::to_string(faces) + ")");
     });
+  // After the decimation: removing pieces first changed the order of its collapses, and on signpost's
+  // fit that order left the mesh open.
+  if (grid_surface) drop_pieces_no_view_needs(mesh, views);
   if (options.color_mode == ColorMode::Texture)
     timed("texture", [&] {
       result.texture = bake_texture(mesh, views, options.coloring, options.texture);

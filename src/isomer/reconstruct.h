@@ -11,7 +11,8 @@
 //                               leaves a mask or the optimised mesh has lost volume the views do not
 //                               show missing; then the fitted optimised mesh or the masks' hull, not
 //                               smoothed)
-//   5. decimation to a face count (geometry/quadric_decimation.h; only when asked, or for textures)
+//   5. decimation to a face count (geometry/quadric_decimation.h; only when asked, or for textures);
+//      a surface from the fit's grid then loses the pieces no view needs (drop_pieces_no_view_needs)
 //   6. colouring               (explicit_target.h: ExplicitTarget + completion, per vertex), or
 //      texture baking          (texture_bake.h: UV atlas, the same colouring per texel)
 // Each stage is a function of the mesh so far; reconstruct() runs them in order and times each. The

@@ -90,13 +90,13 @@ void drop_pieces_no_view_needs(Mesh& mesh, const ViewSet& views) {
   for (size_t f = 0; f < mesh.faces.size(); ++f)
     if (needed[size_t(face_piece[f])]) kept.push_back(mesh.faces[f]);
   std::vector<int> index(mesh.positions.size(), -1);
+  for (const Vec3i& f : kept)
+    for (int k = 0; k < 3; ++k) index[size_t(f[k])] = 0;
   std::vector<Vec3f> positions;
+  for (size_t v = 0; v < index.size(); ++v)
+    if (index[v] == 0) index[v] = int(positions.size()), positions.push_back(mesh.positions[v]);
   for (Vec3i& f : kept)
-    for (int k = 0; k < 3; ++k) {
-      if (index[size_t(f[k])] < 0)
-        index[size_t(f[k])] = int(positions.size()), positions.push_back(mesh.positions[size_t(f[k])]);
-      f[k] = index[size_t(f[k])];
-    }
+    for (int k = 0; k < 3; ++k) f[k] = index[size_t(f[k])];
   mesh.positions = std::move(positions);
   mesh.faces = std::move(kept);
 }
@@ -238,7 +238,6 @@ std::optional<Mesh> fit_optimised_mesh(const Mesh& optimised, const Mesh& smooth
   Mesh hull = silhouette_hull(views, options.final_resolution, faces);
   if (fill && *fill < options.hull_below_fill) {
     progress("silhouette fit: the masks' hull (the mesh lost most of its volume)");
-    drop_pieces_no_view_needs(hull, views);
     return hull;
   }
   Mesh fitted = fit_to_silhouettes(optimised, views, options.final_resolution, faces);
@@ -246,9 +245,7 @@ std::optional<Mesh> fit_optimised_mesh(const Mesh& optimised, const Mesh& smooth
   std::snprintf(line, sizeof line, "silhouette fit: normal error %.2f deg fitted, %.2f deg the masks' hull",
                 fitted_error, hull_error);
   progress(line);
-  Mesh chosen = hull_error < fitted_error ? std::move(hull) : std::move(fitted);
-  drop_pieces_no_view_needs(chosen, views);
-  return chosen;
+  return hull_error < fitted_error ? std::move(hull) : std::move(fitted);
 }
 
 }  // namespace u3d

@@ -101,7 +101,7 @@ std::optional<Mesh> fit_optimised_mesh(const Mesh& optimised, const Mesh& smooth
 // Removes the pieces of `mesh` that no view needs: every pixel a piece covers, in every view, another
 // piece covers too. The silhouette fit's grid leaves such crumbs where hull columns are put back next
 // to a carved part (signpost: four of 22 to 124 faces in front of its pole, against the masks' two
-// pieces); fit_optimised_mesh removes them from its result, after the choice between fit and hull.
+// pieces); reconstruct() removes them from a grid surface it outputs, once decimated.
 void drop_pieces_no_view_needs(Mesh& mesh, const ViewSet& views);
 
 // The fitted mesh on a grid of `resolution` voxels per axis, with at most `target_faces` faces
