@@ -94,7 +94,29 @@ std::string fmt(double v, const char* spec) {
 }
 
 const std::vector<std::string> kMetricKeys = {"cd",   "iou",  "fscore",  "fscore_visible", "hidden",
-                                              "psnr", "ssim", "silhouette_iou_min", "seconds", "faces", "mb"};
+                                              "psnr", "ssim", "silhouette_iou_min", "spurious_px", "spurious_pct",
+                                              "spurious_blob", "missing_blob", "components", "hull_components",
+                                              "seconds", "faces", "mb"};
+
+// The worst view of `unique3d eval --views` (the mask_agreement object of its JSON): the most spurious
+// pixels, the largest share of the mask they make, the largest spurious and missing blobs; and the
+// mesh's and the visual hull's pieces.
+void add_mask_agreement(const json& m, json& row) {
+  double pixels = 0, share = 0, blob = 0, missing = 0;
+  for (const auto& v : m["views"]) {
+    const double spurious = v["spurious"]["pixels"].get<double>();
+    pixels = std::max(pixels, spurious);
+    share = std::max(share, 100.0 * spurious / std::max(v["mask_pixels"].get<double>(), 1.0));
+    blob = std::max(blob, v["spurious"]["largest_blob"].get<double>());
+    missing = std::max(missing, v["missing"]["largest_blob"].get<double>());
+  }
+  row["spurious_px"] = pixels;
+  row["spurious_pct"] = share;
+  row["spurious_blob"] = blob;
+  row["missing_blob"] = missing;
+  row["components"] = m["mesh_components"];
+  row["hull_components"] = m["hull_components"];
+}
 
 // The smallest of the four per-view silhouette IoUs `unique3d reconstruct` prints
 // ("silhouette IoU: front F, right R, back B, left L"); negative when the line is missing.
@@ -116,8 +138,9 @@ double min_silhouette_iou(const std::string& output) {
 
 std::string markdown(const json& rows, const json& means, const std::string& fscore_label) {
   std::string md = "| object | res | variant | CD-L1 | Vol. IoU | " + fscore_label + " | " + fscore_label +
-                   " visible GT | hidden GT | PSNR | SSIM | min sil. IoU | time (s) | faces | GLB (MB) | status |\n"
-                   "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+                   " visible GT | hidden GT | PSNR | SSIM | min sil. IoU | spurious px | spurious % | spurious blob | "
+                   "missing blob | pieces / hull | time (s) | faces | GLB (MB) | status |\n"
+                   "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   auto cell = [](const json& row, const std::string& key, const char* spec) {
     return row.contains(key) && row[key].is_number() ? fmt(row[key].get<double>(), spec) : std::string("-");
   };
@@ -126,7 +149,10 @@ std::string markdown(const json& rows, const json& means, const std::string& fsc
           r["variant"].get<std::string>() + " | " + cell(r, "cd", "%.5f") + " | " + cell(r, "iou", "%.4f") + " | " +
           cell(r, "fscore", "%.4f") + " | " + cell(r, "fscore_visible", "%.4f") + " | " + cell(r, "hidden", "%.3f") +
           " | " + cell(r, "psnr", "%.2f") + " | " + cell(r, "ssim", "%.4f") + " | " +
-          cell(r, "silhouette_iou_min", "%.4f") + " | " + cell(r, "seconds", "%.1f") + " | " + cell(r, "faces", "%.0f") + " | " + cell(r, "mb", "%.2f") + " | " + r["status"].get<std::string>() + " |\n";
+          cell(r, "silhouette_iou_min", "%.4f") + " | " + cell(r, "spurious_px", "%.0f") + " | " +
+          cell(r, "spurious_pct", "%.3f") + " | " + cell(r, "spurious_blob", "%.0f") + " | " +
+          cell(r, "missing_blob", "%.0f") + " | " + cell(r, "components", "%.0f") + " / " +
+          cell(r, "hull_components", "%.0f") + " | " + cell(r, "seconds", "%.1f") + " | " + cell(r, "faces", "%.0f") + " | " + cell(r, "mb", "%.2f") + " | " + r["status"].get<std::string>() + " |\n";
   };
   for (const auto& r : rows) line(r);
   for (const auto& r : means) line(r);
@@ -274,7 +300,7 @@ int main(int argc, char** argv) {
         }
         std::string frame = shared_frame ? " --given-frame --gt-render-fill " + fmt(fill, "%g") : "";
         r = run(bin + " eval " + quote(recon) + " " + quote(mesh) + frame + " --fscore-thresholds " +
-                    fmt(fscore_threshold, "%g") + " --json " + quote(metrics) + " " + eval_args,
+                    fmt(fscore_threshold, "%g") + " --views " + quote(views) + " --json " + quote(metrics) + " " + eval_args,
                 dir / (tag + "_eval.log"));
         if (r.status != 0) {
           row["status"] = "eval failed: " + last_line(r.output);
@@ -292,6 +318,7 @@ int main(int argc, char** argv) {
           row["psnr"] = m["appearance"]["psnr"];
           row["ssim"] = m["appearance"]["ssim"];
         }
+        add_mask_agreement(m["mask_agreement"], row);
         row["faces"] = m["pred"]["faces"];
         row["mb"] = double(fs::file_size(recon)) / 1e6;
         row["warnings"] = m["warnings"];
@@ -330,7 +357,11 @@ int main(int argc, char** argv) {
   std::string md = "# Object benchmark\n\nFrame: " + doc["frame"].get<std::string>() + "; CD-L1, IoU, " + fscore_label +
                    " (also over the GT surface visible from outside; hidden GT = share of GT samples no outside view sees), "
                    "PSNR, SSIM as defined in docs/evaluation.md; min sil. IoU = the smallest of the four silhouette IoUs against "
-                   "the input masks that `unique3d reconstruct` prints; time = wall time of `unique3d reconstruct`.\n";
+                   "the input masks that `unique3d reconstruct` prints; spurious px / % / blob = in the worst view, the mesh pixels "
+                   "farther than 2 px from the input mask, their share of the mask's area and the largest connected group of "
+                   "them; missing blob = the largest group of mask pixels farther than 2 px from the mesh; pieces / hull = "
+                   "connected pieces of the mesh and of the masks' visual hull (docs/evaluation.md); time = wall time of "
+                   "`unique3d reconstruct`.\n";
   if (!perturb_args.empty()) md += "Views perturbed with `unique3d perturb " + perturb_args + "`.\n";
   md += "\n" + markdown(rows, means, fscore_label);
   if (!notes.empty()) {

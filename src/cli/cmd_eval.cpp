@@ -2,11 +2,13 @@
 #include <cstdio>
 #include <fstream>
 #include <memory>
+#include <optional>
 
 #include "cli/command.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/progress.h"
+#include "core/view_set.h"
 #include "eval/eval_report.h"
 #include "eval/evaluate.h"
 #include "io/mesh_io.h"
@@ -18,7 +20,7 @@ namespace {
 constexpr int kSlowIouResolution = 256;
 
 struct EvalArgs {
-  std::string pred_path, gt_path, json_path, save_renders;
+  std::string pred_path, gt_path, json_path, save_renders, views_dir;
   bool given_frame = false;
   bool no_appearance = false;
   EvalOptions options;
@@ -36,7 +38,9 @@ void run_eval(const EvalArgs& a) {
   options.normalize = !a.given_frame;
   options.appearance = !a.no_appearance;
   options.save_renders_dir = a.save_renders;
-  EvalReport report = evaluate_meshes(std::move(pred), std::move(gt), options);
+  std::optional<ViewSet> views;
+  if (!a.views_dir.empty()) views = load_view_set(a.views_dir);
+  EvalReport report = evaluate_meshes(std::move(pred), std::move(gt), options, views ? &*views : nullptr);
   std::fputs(("pred: " + a.pred_path + "\ngt:   " + a.gt_path + "\n" + report_summary(report)).c_str(), stdout);
   if (!a.json_path.empty()) {
     nlohmann::json j = report_to_json(report);
@@ -52,7 +56,8 @@ void run_eval(const EvalArgs& a) {
 }
 
 const CommandRegistration registration{
-    "eval", "Compare a reconstructed mesh with a ground-truth mesh (Chamfer, F-score, volume IoU, PSNR, SSIM)",
+    "eval",
+    "Compare a reconstructed mesh with a ground-truth mesh (Chamfer, F-score, volume IoU, PSNR, SSIM, input masks)",
     [](CLI::App& sub) -> CommandAction {
       auto a = std::make_shared<EvalArgs>();
       sub.add_option("pred", a->pred_path, "Predicted mesh (.obj, .ply, .glb, .gltf)")->required()->check(CLI::ExistingFile);
@@ -74,6 +79,11 @@ const CommandRegistration registration{
       sub.add_option("--ssaa", a->options.appearance_options.ssaa, "Supersampling per axis of the renders")
           ->capture_default_str()->check(CLI::Range(1, 8));
       sub.add_flag("--no-appearance", a->no_appearance, "Skip the rendered PSNR/SSIM comparison");
+      sub.add_option("--views", a->views_dir,
+                     "The view set PRED was reconstructed from (PRED in its frame): count mesh pixels over the masks' "
+                     "background and mask pixels the mesh misses, per view, and compare the mesh's pieces with the "
+                     "masks' visual hull")
+          ->check(CLI::ExistingDirectory);
       sub.add_option("--save-renders", a->save_renders, "Write the 2 x 24 renders to this folder");
       sub.add_option("--seed", a->options.seed, "Seed of the surface sampling")->capture_default_str();
       return [a] { run_eval(*a); };

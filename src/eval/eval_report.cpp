@@ -25,6 +25,27 @@ nlohmann::json fscores_json(const std::vector<FScore>& fscores) {
   return out;
 }
 
+nlohmann::json blobs_json(const PixelBlobs& b) {
+  return {{"pixels", b.pixels}, {"blobs", b.blobs}, {"largest_blob", b.largest_blob}};
+}
+
+nlohmann::json mask_agreement_json(const MaskAgreement& m) {
+  nlohmann::json views = nlohmann::json::array();
+  for (View v : kAllViews) {
+    const ViewMaskAgreement& a = m.views[size_t(v)];
+    views.push_back({{"view", view_name(v)},
+                     {"mask_pixels", a.mask_pixels},
+                     {"mesh_pixels", a.mesh_pixels},
+                     {"spurious", blobs_json(a.spurious)},
+                     {"missing", blobs_json(a.missing)}});
+  }
+  return {{"tolerance_px", m.options.tolerance_px},
+          {"hull_resolution", m.options.hull_resolution},
+          {"mesh_components", m.mesh_components},
+          {"hull_components", m.hull_components},
+          {"views", views}};
+}
+
 std::string format(const char* fmt, double value) {
   char buf[64];
   std::snprintf(buf, sizeof buf, fmt, value);
@@ -77,6 +98,7 @@ nlohmann::json report_to_json(const EvalReport& r) {
   } else {
     j["appearance"] = nullptr;
   }
+  j["mask_agreement"] = r.mask_agreement ? mask_agreement_json(*r.mask_agreement) : nlohmann::json(nullptr);
   j["warnings"] = r.warnings;
   j["seconds"] = {{"geometry", r.geometry_seconds}, {"appearance", r.appearance_seconds}};
   return j;
@@ -106,6 +128,22 @@ std::string report_summary(const EvalReport& r) {
   if (r.appearance) {
     s += "PSNR:           " + format("%.3f", r.appearance->psnr) + " dB  (mean of 24 views)\n";
     s += "SSIM:           " + format("%.4f", r.appearance->ssim) + "\n";
+  }
+  if (r.mask_agreement) {
+    const MaskAgreement& m = *r.mask_agreement;
+    auto per_view = [&](const char* what, PixelBlobs ViewMaskAgreement::*kind) {
+      std::string line = std::string(what) + " (farther than " + format("%g", m.options.tolerance_px) + " px):";
+      for (View v : kAllViews) {
+        const PixelBlobs& b = m.views[size_t(v)].*kind;
+        line += std::string(v == View::Front ? " " : ", ") + view_name(v) + " " + std::to_string(b.pixels) + " px";
+        if (b.pixels) line += " in " + std::to_string(b.blobs) + " blob(s), largest " + std::to_string(b.largest_blob);
+      }
+      return line + "\n";
+    };
+    s += "input masks:    " + per_view("mesh over background", &ViewMaskAgreement::spurious);
+    s += "                " + per_view("mask not covered", &ViewMaskAgreement::missing);
+    s += "components:     mesh " + std::to_string(m.mesh_components) + ", visual hull of the masks " +
+         std::to_string(m.hull_components) + "\n";
   }
   for (const auto& w : r.warnings) s += "warning: " + w + "\n";
   return s;

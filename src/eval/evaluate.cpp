@@ -16,7 +16,7 @@ MeshSummary summarize(const Mesh& mesh) {
 
 }  // namespace
 
-EvalReport evaluate_meshes(Mesh pred, Mesh gt, const EvalOptions& options) {
+EvalReport evaluate_meshes(Mesh pred, Mesh gt, const EvalOptions& options, const ViewSet* input_views) {
   pred.validate("predicted mesh");
   gt.validate("ground-truth mesh");
   require(options.surface_samples >= 100, "at least 100 surface samples are needed, got " +
@@ -25,6 +25,10 @@ EvalReport evaluate_meshes(Mesh pred, Mesh gt, const EvalOptions& options) {
     require(t > 0, "F-score thresholds must be positive, got " + std::to_string(t));
   EvalReport r;
   r.options = options;
+  if (input_views) {
+    StageTimer timer("agreement with the input masks");
+    r.mask_agreement = mask_agreement(pred, *input_views, options.mask_agreement);
+  }
   require(options.gt_render_fill >= 0, "render fill must not be negative");
   require(options.gt_render_fill == 0 || !options.normalize,
           "placing the GT in a render frame only makes sense in the shared frame");

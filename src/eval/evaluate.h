@@ -1,6 +1,7 @@
 #pragma once
 // The whole evaluation of a predicted mesh against ground truth (docs/evaluation.md): frame
-// normalization, geometry metrics (Chamfer, F-score, volume IoU) and appearance metrics (PSNR, SSIM).
+// normalization, geometry metrics (Chamfer, F-score, volume IoU), appearance metrics (PSNR, SSIM) and,
+// given the views the prediction was reconstructed from, its agreement with their masks.
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -10,6 +11,7 @@
 #include "eval/appearance.h"
 #include "eval/chamfer.h"
 #include "eval/fscore.h"
+#include "eval/mask_agreement.h"
 #include "eval/mesh_checks.h"
 #include "eval/visible_surface.h"
 #include "eval/volume_iou.h"
@@ -32,6 +34,7 @@ struct EvalOptions {
   int iou_resolution = 64;
   bool appearance = true;
   AppearanceOptions appearance_options;
+  MaskAgreementOptions mask_agreement;  // with input views only
   std::string save_renders_dir;  // empty: renders are not written
   uint64_t seed = 0;
 };
@@ -55,13 +58,16 @@ struct EvalReport {
   std::vector<FScore> fscores_visible;
   VolumeIou iou;
   std::optional<AppearanceMetrics> appearance;
+  std::optional<MaskAgreement> mask_agreement;  // with input views only
   std::vector<std::string> warnings;
   double geometry_seconds = 0;
   double appearance_seconds = 0;
 };
 
 // Throws Error when a mesh is empty or invalid; imperfect meshes (open, degenerate faces, no colour)
-// are evaluated and reported in `warnings`.
-EvalReport evaluate_meshes(Mesh pred, Mesh gt, const EvalOptions& options);
+// are evaluated and reported in `warnings`. `input_views` (optional): the views `pred` was
+// reconstructed from, in whose frame it lies; then `mask_agreement` is measured (before any frame
+// transform).
+EvalReport evaluate_meshes(Mesh pred, Mesh gt, const EvalOptions& options, const ViewSet* input_views = nullptr);
 
 }  // namespace u3d

@@ -15,9 +15,16 @@ Mesh stage_initial_mesh(const ViewSet& views, const ReconstructOptions& options,
   if (options.sphere_init) return sphere_initial_mesh();
   Mesh initial = build_initial_mesh(views, options.init);
   const SilhouetteFitOptions& fit = options.silhouette_fit;
-  if (!fit.enabled || min_silhouette_iou(initial, views) >= fit.initial_min_iou) return initial;
+  if (!fit.enabled) return initial;
+  const size_t faces = size_t(options.init.target_faces);
+  // A mesh that misses most of a mask is fitted to the masks; one with more pieces than the masks'
+  // hull gives way to that hull.
+  std::optional<Mesh> replaced = min_silhouette_iou(initial, views) < fit.initial_min_iou
+                                     ? fit_to_silhouettes(initial, views, fit.resolution, faces)
+                                     : hull_for_extra_pieces(initial, views, fit, faces);
+  if (!replaced) return initial;
   if (fitted) *fitted = true;
-  return fit_to_silhouettes(initial, views, fit.resolution, size_t(options.init.target_faces));
+  return std::move(*replaced);
 }
 
 size_t final_face_count(const ReconstructOptions& options) {
@@ -63,9 +70,13 @@ ReconstructResult reconstruct(const ViewSet& views, const ReconstructOptions& op
   Mesh smoothed;
   timed("smooth and subdivide", [&] { smoothed = fitted ? mesh : smooth_and_subdivide(mesh, options.cleanup); });
   const SilhouetteFitOptions& fit = options.silhouette_fit;
+  bool grid_surface = fitted;  // a surface from the fit's grid, which can leave crumbs
   if (fit.enabled && (options.run_coarse || options.run_refine))
     timed("silhouette fit", [&] {
-      if (std::optional<Mesh> fitted_mesh = fit_optimised_mesh(mesh, smoothed, views, fit)) smoothed = std::move(*fitted_mesh);
+      if (std::optional<Mesh> fitted_mesh = fit_optimised_mesh(mesh, smoothed, views, fit)) {
+        smoothed = std::move(*fitted_mesh);
+        grid_surface = true;
+      }
     });
   mesh = std::move(smoothed);
   const size_t faces = final_face_count(options);
@@ -76,6 +87,9 @@ ReconstructResult reconstruct(const ViewSet& views, const ReconstructOptions& op
         progress("warning: decimation stopped at " + std::to_string(mesh.faces.size()) + " faces (asked for " +
                  std::to_string(faces) + ")");
     });
+  // After the decimation: removing pieces first changed the order of its collapses, and on signpost's
+  // fit that order left the mesh open.
+  if (grid_surface) drop_pieces_no_view_needs(mesh, views);
   if (options.color_mode == ColorMode::Texture)
     timed("texture", [&] {
       result.texture = bake_texture(mesh, views, options.coloring, options.texture);

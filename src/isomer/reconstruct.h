@@ -1,8 +1,9 @@
 #pragma once
 // ISOMER, the whole reconstruction from a view set to a coloured mesh, as a fixed sequence of stages
 // (paper Sec. 3.2, official `geo_reconstruct`):
-//   1. initial mesh            (initial_mesh.h, fitted to the masks by silhouette_fit.h; or a sphere,
-//                               or the visual hull: visual_hull.h)
+//   1. initial mesh            (initial_mesh.h; fitted to the masks by silhouette_fit.h when it misses
+//                               most of a mask, the masks' hull when it has more pieces than that hull;
+//                               or a sphere, or the visual hull: visual_hull.h)
 //   2. coarse optimisation     (coarse_stage.h: fit normals and masks at 512 px)
 //   3. refinement              (refine_stage.h: view or ExplicitTarget normals, at up to 512 px)
 //   4. smooth and subdivide    (surface_cleanup.h)
@@ -10,7 +11,8 @@
 //                               leaves a mask or the optimised mesh has lost volume the views do not
 //                               show missing; then the fitted optimised mesh or the masks' hull, not
 //                               smoothed)
-//   5. decimation to a face count (geometry/quadric_decimation.h; only when asked, or for textures)
+//   5. decimation to a face count (geometry/quadric_decimation.h; only when asked, or for textures);
+//      a surface from the fit's grid then loses the pieces no view needs (drop_pieces_no_view_needs)
 //   6. colouring               (explicit_target.h: ExplicitTarget + completion, per vertex), or
 //      texture baking          (texture_bake.h: UV atlas, the same colouring per texel)
 // Each stage is a function of the mesh so far; reconstruct() runs them in order and times each. The
@@ -74,7 +76,7 @@ struct ReconstructResult {
 };
 
 // Stage 1: the initial mesh, the sphere or the visual hull, as the options choose. `fitted` (if given)
-// says whether the initial mesh was fitted to the masks.
+// says whether the initial mesh was replaced by a grid surface (fitted to the masks, or their hull).
 Mesh stage_initial_mesh(const ViewSet& views, const ReconstructOptions& options, bool* fitted = nullptr);
 
 ReconstructResult reconstruct(const ViewSet& views, const ReconstructOptions& options = {});

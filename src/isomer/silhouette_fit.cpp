@@ -8,6 +8,8 @@
 
 #include "core/error.h"
 #include "core/progress.h"
+#include "geometry/disjoint_sets.h"
+#include "geometry/grid_components.h"
 #include "geometry/mesh_topology.h"
 #include "geometry/quadric_decimation.h"
 #include "isomer/silhouette_check.h"
@@ -48,7 +50,56 @@ struct DepthView {
   }
 };
 
+// The surface of the masks' hull field, decimated to `target_faces`.
+Mesh hull_surface(const ScalarGrid& hull, size_t target_faces) {
+  Mesh surface = extract_zero_surface(hull);
+  require(!surface.faces.empty(), "silhouette fit: the four masks share no volume");
+  return surface.face_count() <= target_faces ? surface : decimate_closed_mesh(surface, target_faces);
+}
+
 }  // namespace
+
+void drop_pieces_no_view_needs(Mesh& mesh, const ViewSet& views) {
+  DisjointSets sets(mesh.positions.size());
+  for (const Vec3i& f : mesh.faces) sets.unite(f[1], f[0]), sets.unite(f[2], f[0]);
+  std::vector<int> piece_of_root(mesh.positions.size(), -1), face_piece(mesh.faces.size());
+  int pieces = 0;
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    int& piece = piece_of_root[size_t(sets.find(mesh.faces[f][0]))];
+    if (piece < 0) piece = pieces++;
+    face_piece[f] = piece;
+  }
+  if (pieces <= 1) return;
+  std::vector<uint8_t> needed(size_t(pieces), 0);
+  for (View v : kAllViews) {
+    const Camera camera = view_camera(v, views[v].normals.width);
+    std::vector<std::vector<size_t>> covered(static_cast<size_t>(pieces));
+    std::vector<uint8_t> count(size_t(camera.width) * size_t(camera.height), 0);
+    for (int p = 0; p < pieces; ++p) {
+      std::vector<Vec3i> faces;
+      for (size_t f = 0; f < mesh.faces.size(); ++f)
+        if (face_piece[f] == p) faces.push_back(mesh.faces[f]);
+      const RasterBuffer raster = rasterize(mesh.positions, faces, camera);
+      for (size_t i = 0; i < raster.pixel_count(); ++i)
+        if (raster.covered(i)) covered[size_t(p)].push_back(i), count[i] = uint8_t(std::min(count[i] + 1, 2));
+    }
+    for (int p = 0; p < pieces; ++p)
+      for (size_t i : covered[size_t(p)]) needed[size_t(p)] = needed[size_t(p)] || count[i] == 1;
+  }
+  std::vector<Vec3i> kept;
+  for (size_t f = 0; f < mesh.faces.size(); ++f)
+    if (needed[size_t(face_piece[f])]) kept.push_back(mesh.faces[f]);
+  std::vector<int> index(mesh.positions.size(), -1);
+  for (const Vec3i& f : kept)
+    for (int k = 0; k < 3; ++k) index[size_t(f[k])] = 0;
+  std::vector<Vec3f> positions;
+  for (size_t v = 0; v < index.size(); ++v)
+    if (index[v] == 0) index[v] = int(positions.size()), positions.push_back(mesh.positions[v]);
+  for (Vec3i& f : kept)
+    for (int k = 0; k < 3; ++k) f[k] = index[size_t(f[k])];
+  mesh.positions = std::move(positions);
+  mesh.faces = std::move(kept);
+}
 
 ScalarGrid silhouette_fit_field(const Mesh& mesh, const ViewSet& views, int resolution) {
   const ScalarGrid hull = visual_hull_field(views, resolution, HullMasks::Normals);
@@ -143,9 +194,19 @@ float normal_map_error(const Mesh& mesh, const ViewSet& views) {
 
 Mesh silhouette_hull(const ViewSet& views, int resolution, size_t target_faces) {
   StageTimer timer("silhouette fit: the masks' hull at " + std::to_string(resolution) + "^3");
-  Mesh surface = extract_zero_surface(visual_hull_field(views, resolution, HullMasks::Normals));
-  require(!surface.faces.empty(), "silhouette fit: the four masks share no volume");
-  return surface.face_count() <= target_faces ? surface : decimate_closed_mesh(surface, target_faces);
+  return hull_surface(visual_hull_field(views, resolution, HullMasks::Normals), target_faces);
+}
+
+std::optional<Mesh> hull_for_extra_pieces(const Mesh& initial, const ViewSet& views,
+                                          const SilhouetteFitOptions& options, size_t target_faces) {
+  const int pieces = mesh_topology(initial).components;
+  if (pieces <= 1) return std::nullopt;  // the hull has at least one
+  const ScalarGrid hull = visual_hull_field(views, options.pieces_resolution, HullMasks::Normals);
+  const int hull_pieces = count_inside_components(hull);
+  if (pieces <= hull_pieces) return std::nullopt;
+  progress("silhouette fit: the initial mesh has " + std::to_string(pieces) + " pieces, the masks' hull " +
+           std::to_string(hull_pieces) + ": starting from the hull");
+  return hull_surface(hull, target_faces);
 }
 
 Mesh fit_to_silhouettes(const Mesh& mesh, const ViewSet& views, int resolution, size_t target_faces) {

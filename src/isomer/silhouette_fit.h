@@ -37,6 +37,18 @@ struct SilhouetteFitOptions {
   // check is on the smoothed and subdivided mesh (what would be output); the fit starts from the
   // optimised mesh before smoothing.
   float initial_min_iou = 0.3f;
+  // The initial mesh is replaced by the masks' visual hull (on a grid of pieces_resolution, decimated
+  // to the initial mesh's face count) when it has more pieces than that hull: screened Poisson can
+  // join parts across a gap the masks show open and cut them off where the masks hold them together
+  // (spot's horns: one piece with a band across the gap between them, floating above the head;
+  // human_man: three pieces). Remeshing keeps the pieces, so the band survived the optimisation as a
+  // wire over the background (134 pixels of the bundled example's front view) and the horns as a piece
+  // of their own. Fitting that mesh instead (fit_to_silhouettes) keeps its depth but threads it with
+  // tunnels along the rays of the mask pixels it misses (Euler characteristic -30 to -148 on spot at
+  // 64^3 to 192^3); the hull has the masks' own topology, and the optimisation finds the depth from it
+  // (docs/evaluation.md, "Geometry over the background"). 64 is the Poisson surface's own resolution
+  // (depth 6); the hull there costs about 0.3 s.
+  int pieces_resolution = 64;
   float final_min_iou = 0.97f;
   // Voxels per axis over the views' box [-1, 1]^3: for the initial mesh, and for the optimised mesh
   // (finer, as its detail is kept at this resolution). 192 gives a plate of 2 % of a 1.8-unit object
@@ -69,6 +81,12 @@ float min_silhouette_iou(const Mesh& mesh, const ViewSet& views);
 // both cover: how well a candidate explains the normal maps (180 when they share no pixel).
 float normal_map_error(const Mesh& mesh, const ViewSet& views);
 
+// The masks' hull (silhouette_hull) when `initial` has more pieces than it, on a grid of
+// options.pieces_resolution, decimated to `target_faces`; empty otherwise. Reports the pieces as a
+// progress message when it replaces the mesh.
+std::optional<Mesh> hull_for_extra_pieces(const Mesh& initial, const ViewSet& views,
+                                          const SilhouetteFitOptions& options, size_t target_faces);
+
 // The visual hull of the normal maps' masks on a grid of `resolution`, decimated to `target_faces`.
 Mesh silhouette_hull(const ViewSet& views, int resolution, size_t target_faces);
 
@@ -79,6 +97,12 @@ Mesh silhouette_hull(const ViewSet& views, int resolution, size_t target_faces);
 // the normal maps better (normal_map_error). Reports its measures as progress messages.
 std::optional<Mesh> fit_optimised_mesh(const Mesh& optimised, const Mesh& smoothed, const ViewSet& views,
                                        const SilhouetteFitOptions& options);
+
+// Removes the pieces of `mesh` that no view needs: every pixel a piece covers, in every view, another
+// piece covers too. The silhouette fit's grid leaves such crumbs where hull columns are put back next
+// to a carved part (signpost: four of 22 to 124 faces in front of its pole, against the masks' two
+// pieces); reconstruct() removes them from a grid surface it outputs, once decimated.
+void drop_pieces_no_view_needs(Mesh& mesh, const ViewSet& views);
 
 // The fitted mesh on a grid of `resolution` voxels per axis, with at most `target_faces` faces
 // (closed, manifold, outward). Throws Error if the masks share no volume.

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "core/image.h"
+#include "core/synthetic_views.h"
 #include "geometry/test_shapes.h"
 #include "io/mesh_io.h"
 
@@ -62,6 +63,7 @@ TEST_F(CliEval, IdenticalMeshesWriteAPerfectJsonReport) {
     EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
 }
 
+<<<<<<< HEAD
 // The first mesh is the prediction, the second the ground truth. GT: a unit cube A and a box B of a
 // quarter of its area (1.5 against 6) 1 unit away; prediction: A alone. Every predicted sample lies on
 // the GT (precision 1, accuracy 0); a fifth of the GT's samples lie on B (recall 0.8), at 1.25 units from
@@ -89,6 +91,33 @@ TEST_F(CliEval, ArgumentsArePredictionThenGroundTruth) {
     EXPECT_DOUBLE_EQ(score["precision"].get<double>(), 1.0) << score;
     EXPECT_NEAR(score["recall"].get<double>(), 0.8, 0.015) << score;  // 20000 samples: standard error 0.003
   }
+=======
+// --views: the prediction against the masks it came from. A box with a band 5 px above it (64 px views of
+// the box alone): the band's pixels in every view, two pieces against the hull's one.
+TEST_F(CliEval, ViewsGiveTheAgreementWithTheInputMasks) {
+  const Vec3f lo = Vec3f::Constant(-0.5f), hi = Vec3f::Constant(0.5f);
+  u3d::testing::write_view_set(u3d::testing::boxes_views({{lo, hi}}, 64), dir / "views");
+  Mesh pred = test::box_mesh(lo, hi);
+  const Mesh band = test::box_mesh(Vec3f(-0.25f, 0.625f, -0.03125f), Vec3f(0.25f, 0.6875f, 0.03125f));
+  for (const Vec3i& f : band.faces) pred.faces.push_back(f + Vec3i::Constant(int(pred.positions.size())));
+  pred.positions.insert(pred.positions.end(), band.positions.begin(), band.positions.end());
+  write_mesh(pred, dir / "pred.ply");
+  const std::string meshes = (dir / "pred.ply").string() + " " + (dir / "pred.ply").string();
+  CliRun r = run_cli("eval " + meshes + " --samples 2000 --iou-resolution 16 --no-appearance --views " +
+                         (dir / "views").string() + " --json " + (dir / "m.json").string(),
+                     dir);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("front 32 px in 1 blob(s), largest 32, right 4 px"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("components:     mesh 2, visual hull of the masks 1"), std::string::npos) << r.output;
+  nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "m.json"));
+  EXPECT_EQ(j["mask_agreement"]["views"][2]["spurious"]["largest_blob"].get<int>(), 32);
+  EXPECT_EQ(j["mask_agreement"]["views"][2]["missing"]["pixels"].get<int>(), 0);
+  CliRun without = run_cli("eval " + meshes + " --samples 2000 --iou-resolution 16 --no-appearance --json " +
+                               (dir / "m.json").string(),
+                           dir);
+  ASSERT_EQ(without.status, 0) << without.output;
+  EXPECT_TRUE(nlohmann::json::parse(std::ifstream(dir / "m.json"))["mask_agreement"].is_null());
+>>>>>>> fidelity-40
 }
 
 // A grid of 10^9 cells (--iou-resolution 1024) runs for minutes: the user is told before it starts.

@@ -207,6 +207,55 @@ TEST(SilhouetteFit, NormalMapErrorMeasuresHowWellAMeshExplainsTheMaps) {
   EXPECT_GT(normal_map_error(make_icosphere(4, 0.5f), views), 20.f);
 }
 
+// Issue 40: an initial mesh with more pieces than the masks' hull (Poisson cut a part off and joined
+// it across a gap) gives way to the hull, which has the masks' own pieces; one whose pieces the hull
+// has is kept.
+TEST(SilhouetteFit, InitialMeshWithMorePiecesThanTheHullGivesWayToTheHull) {
+  const Box body{{-0.5f, -0.5f, -0.25f}, {0.5f, 0.25f, 0.25f}};
+  const Box horn{{-0.125f, 0.25f, -0.125f}, {0.125f, 0.5f, 0.125f}};
+  const ViewSet views = boxes_views({body, horn}, 128);
+  SilhouetteFitOptions options;
+  // The horn cut off the body: two pieces, where the masks hold one.
+  const Box floating{{-0.125f, 0.3125f, -0.125f}, {0.125f, 0.5f, 0.125f}};
+  const std::optional<Mesh> hull = hull_for_extra_pieces(union_of({body, floating}), views, options, 2000);
+  ASSERT_TRUE(hull);
+  const MeshTopology topo = mesh_topology(*hull);
+  EXPECT_TRUE(topo.closed_manifold());
+  EXPECT_EQ(topo.components, 1);
+  EXPECT_EQ(topo.euler_characteristic, 2);
+  EXPECT_LE(hull->face_count(), 2000u);
+  EXPECT_GT(min_iou(*hull, views), 0.95f);
+  // One piece, or as many as the hull has: kept.
+  EXPECT_FALSE(hull_for_extra_pieces(union_of({body}), views, options, 2000));
+  const Box apart{{0.625f, -0.5f, -0.125f}, {0.875f, 0.f, 0.125f}};
+  EXPECT_FALSE(hull_for_extra_pieces(union_of({body, apart}), boxes_views({body, apart}, 128), options, 2000));
+}
+
+// Pieces hidden in every view behind or inside others go; a piece that shows pixels of its own stays.
+TEST(SilhouetteFit, PiecesNoViewNeedsAreDropped) {
+  const Box body{{-0.5f, -0.5f, -0.5f}, {0.5f, 0.5f, 0.5f}};
+  const ViewSet views = boxes_views({body}, 64);
+  const Box inside{{-0.25f, -0.25f, -0.25f}, {0.25f, 0.25f, 0.25f}};
+  Mesh mesh = union_of({body, inside});
+  drop_pieces_no_view_needs(mesh, views);
+  EXPECT_EQ(mesh.face_count(), 12u);
+  EXPECT_EQ(mesh.positions.size(), 8u);
+  EXPECT_EQ(bounding_box(mesh.positions).max, body.second);
+  // A crumb in front of a thin part, within a deep part's depth (signpost's crumbs in front of its
+  // pole): the thin part covers its pixels in the front and back views, the deep one in the sides.
+  const Box deep{{-0.5f, -0.5f, -0.5f}, {-0.125f, 0.5f, 0.5f}}, thin{{0.125f, -0.5f, -0.125f}, {0.5f, 0.5f, 0.125f}};
+  const Box crumb{{0.25f, -0.0625f, 0.25f}, {0.375f, 0.0625f, 0.3125f}};
+  mesh = union_of({deep, thin, crumb});
+  drop_pieces_no_view_needs(mesh, boxes_views({deep, thin}, 64));
+  EXPECT_EQ(mesh.face_count(), 24u);
+  EXPECT_EQ(bounding_box(mesh.positions).max.x(), 0.5f);
+  // Beside the body, it shows in the front view: kept.
+  const Box beside{{0.625f, -0.0625f, -0.0625f}, {0.75f, 0.0625f, 0.0625f}};
+  mesh = union_of({body, beside});
+  drop_pieces_no_view_needs(mesh, views);
+  EXPECT_EQ(mesh.face_count(), 24u);
+}
+
 TEST(SilhouetteFit, BadOptionsAreErrors) {
   const ViewSet views = boxes_views(frame(), 64);
   const Mesh mesh = box_mesh({-0.6f, -0.6f, -0.08f}, {0.6f, 0.6f, 0.08f});

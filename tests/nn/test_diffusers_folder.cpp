@@ -58,7 +58,7 @@ TEST_F(DiffusersFolderTest, MissingFilesNameTheFileAndTheDownload) {
   std::string msg = error_of([&] { folder.component_weights("unet"); });
   EXPECT_NE(msg.find((root_ / "unet").string()), std::string::npos) << msg;
   EXPECT_NE(msg.find("diffusion_pytorch_model"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("wukailu/Unique3D"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("space Wuvin/Unique3D"), std::string::npos) << msg;
   EXPECT_NE(msg.find("lambdalabs/sd-image-variations-diffusers"), std::string::npos) << msg;
   msg = error_of([&] { folder.scheduler_config(); });
   EXPECT_NE(msg.find("scheduler/scheduler_config.json"), std::string::npos) << msg;

@@ -134,7 +134,7 @@ TEST_F(RefineFolders, MissingFilesAreNamed) {
   EXPECT_THROW(RefineModel::files(paths), u3d::Error);
   expect_named("ip-adapter_sd15.safetensors", "h94/IP-Adapter");
   fs::remove_all(paths.ckpt / "controlnet-tile");
-  expect_named("controlnet-tile", "wukailu/Unique3D");
+  expect_named("controlnet-tile", "space Wuvin/Unique3D");
 }
 
 TEST_F(RefineFolders, RejectsBadInputs) {

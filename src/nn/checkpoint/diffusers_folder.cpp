@@ -11,7 +11,7 @@ namespace fs = std::filesystem;
 namespace u3d::nn {
 
 std::string DiffusersFolder::default_download_hint() {
-  return "the Unique3D checkpoints are the ckpt/ folder of the Hugging Face model wukailu/Unique3D "
+  return "the Unique3D checkpoints are the ckpt/ folder of the Hugging Face space Wuvin/Unique3D "
          "(ckpt/img2mvimg, ckpt/image2normal); the plain image-variation model is "
          "lambdalabs/sd-image-variations-diffusers";
 }

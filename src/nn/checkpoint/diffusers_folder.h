@@ -1,6 +1,6 @@
 #pragma once
 // The on-disk layout of a diffusers model folder, as published on Hugging Face (e.g.
-// lambdalabs/sd-image-variations-diffusers, or Unique3D's wukailu/Unique3D ckpt/img2mvimg and
+// lambdalabs/sd-image-variations-diffusers, or the Unique3D space Wuvin/Unique3D's ckpt/img2mvimg and
 // ckpt/image2normal, which add unet_state_dict.pth):
 //
 //   unet/config.json           unet/diffusion_pytorch_model.safetensors   (or .bin)

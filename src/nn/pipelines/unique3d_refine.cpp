@@ -46,7 +46,7 @@ struct RefineFiles {
     const DiffusersFolder base(c.base, "the Stable Diffusion 1.5 base model is runwayml/stable-diffusion-v1-5 "
                                        "(diffusers layout) on Hugging Face");
     const DiffusersFolder ckpt(c.ckpt, "the tile ControlNet is ckpt/controlnet-tile of the Unique3D checkpoints "
-                                       "(Hugging Face wukailu/Unique3D)");
+                                       "(Hugging Face space Wuvin/Unique3D)");
     const DiffusersFolder ip(c.ip_adapter, "the IP-Adapter is the Hugging Face repository h94/IP-Adapter");
     unet_config = base.component_config("unet");
     unet_weights = base.component_weights("unet");
