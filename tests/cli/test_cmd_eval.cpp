@@ -63,7 +63,6 @@ TEST_F(CliEval, IdenticalMeshesWriteAPerfectJsonReport) {
     EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
 }
 
-<<<<<<< HEAD
 // The first mesh is the prediction, the second the ground truth. GT: a unit cube A and a box B of a
 // quarter of its area (1.5 against 6) 1 unit away; prediction: A alone. Every predicted sample lies on
 // the GT (precision 1, accuracy 0); a fifth of the GT's samples lie on B (recall 0.8), at 1.25 units from
@@ -91,7 +90,8 @@ TEST_F(CliEval, ArgumentsArePredictionThenGroundTruth) {
     EXPECT_DOUBLE_EQ(score["precision"].get<double>(), 1.0) << score;
     EXPECT_NEAR(score["recall"].get<double>(), 0.8, 0.015) << score;  // 20000 samples: standard error 0.003
   }
-=======
+}
+
 // --views: the prediction against the masks it came from. A box with a band 5 px above it (64 px views of
 // the box alone): the band's pixels in every view, two pieces against the hull's one.
 TEST_F(CliEval, ViewsGiveTheAgreementWithTheInputMasks) {
@@ -117,7 +117,6 @@ TEST_F(CliEval, ViewsGiveTheAgreementWithTheInputMasks) {
                            dir);
   ASSERT_EQ(without.status, 0) << without.output;
   EXPECT_TRUE(nlohmann::json::parse(std::ifstream(dir / "m.json"))["mask_agreement"].is_null());
->>>>>>> fidelity-40
 }
 
 // A grid of 10^9 cells (--iou-resolution 1024) runs for minutes: the user is told before it starts.
