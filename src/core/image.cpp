@@ -89,6 +89,15 @@ void save_image(const Image& image, const fs::path& path, int bit_depth) {
   });
 }
 
+Image quantized_8bit(const Image& image) {
+  cv::Mat levels;
+  to_mat(image).convertTo(levels, CV_8U, 255.0);  // as save_image
+  Image out(image.width, image.height, image.channels);
+  const float scale = float(1.0 / 255.0);  // as the PNG decoder (core/image_decode.cpp)
+  for (size_t i = 0; i < out.data.size(); ++i) out.data[i] = float(levels.data[i]) * scale;
+  return out;
+}
+
 Image resize_image(const Image& image, int width, int height) {
   require(width > 0 && height > 0, "resize to an empty size");
   if (width == image.width && height == image.height) return image;

@@ -37,6 +37,10 @@ Image load_image_rgba(const std::filesystem::path& path);
 // Values are clamped to [0, 1]; NaN is rejected with an Error.
 void save_image(const Image& image, const std::filesystem::path& path, int bit_depth = 8);
 
+// The image as save_image writes it at 8 bits and load_image reads it back: each value clamped to [0, 1]
+// and rounded to the nearest of 256 levels, bit for bit what the file gives.
+Image quantized_8bit(const Image& image);
+
 // Bilinear/area resize (OpenCV INTER_AREA when shrinking, INTER_LINEAR when enlarging).
 Image resize_image(const Image& image, int width, int height);
 

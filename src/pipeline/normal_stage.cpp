@@ -168,6 +168,11 @@ ViewSetImages run_normal_stage(const std::array<Image, 4>& views, const NetworkO
     } else {
       out.rgb[i] = with_alpha(rgb, eroded_mask(alpha_at(out.normals[i], rgb_size)));
     }
+    // As the view set's 8-bit files hold them (the official code hands 8-bit images on too), so that a
+    // run resumed from the kept view set, or `reconstruct` of the folder `normals` writes, starts from
+    // the very images this run goes on with.
+    out.rgb[i] = quantized_8bit(out.rgb[i]);
+    out.normals[i] = quantized_8bit(out.normals[i]);
   }
   return out;
 }

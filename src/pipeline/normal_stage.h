@@ -28,6 +28,7 @@ struct NormalOptions {
 struct ViewSetImages {
   std::array<Image, 4> rgb;      // RGBA, alpha = mask; all the size of the largest input view
   std::array<Image, 4> normals;  // RGBA, world-space (n + 1) / 2, background RGB 0
+  // (both at the 256 levels of the 8-bit files that hold a view set: core/image.h, quantized_8bit)
 };
 
 // views: RGB(A) in [0, 1], in View order; the front view should carry the object's alpha (else its mask

@@ -64,6 +64,29 @@ TEST(Image, PngRoundTrip8And16BitKeepsAlpha) {
   }
 }
 
+// quantized_8bit is what an 8-bit PNG gives back, bit for bit: on every level, half-way between levels
+// (where the rounding rule shows), just off them, and outside [0, 1].
+TEST(Image, Quantized8BitIsWhatThePngGivesBack) {
+  for (int channels : {1, 3, 4}) {
+    Image im(256, 5, channels);
+    for (int x = 0; x < 256; ++x)
+      for (int c = 0; c < channels; ++c) {
+        im.at(x, 0, c) = float(x) / 255.f;
+        im.at(x, 1, c) = (float(x) + 0.5f) / 255.f;
+        im.at(x, 2, c) = (float(x) + 0.5f) / 255.f - 1e-7f * float(c + 1);
+        im.at(x, 3, c) = std::nextafter(float(x) / 255.f, 2.f);
+        im.at(x, 4, c) = x % 2 ? 1.f + float(x) : -float(x);
+      }
+    const fs::path p = temp_dir() / ("quantized" + std::to_string(channels) + ".png");
+    save_image(im, p);
+    const Image back = load_image(p), q = quantized_8bit(im);
+    ASSERT_EQ(q.channels, channels);
+    ASSERT_EQ(q.data.size(), back.data.size());
+    for (size_t i = 0; i < q.data.size(); ++i) ASSERT_EQ(q.data[i], back.data[i]) << i;
+    EXPECT_EQ(quantized_8bit(q).data, q.data);
+  }
+}
+
 TEST(Image, RgbChannelOrderIsRgb) {
   Image im(1, 1, 3);
   im.at(0, 0, 0) = 1.f;  // pure red
