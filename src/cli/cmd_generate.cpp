@@ -4,6 +4,7 @@
 #include <fstream>
 
 #include "cli/command.h"
+#include "cli/isomer_options.h"
 #include "cli/mesh_output_options.h"
 #include "cli/network_options.h"
 #include "core/atomic_file.h"
@@ -20,6 +21,7 @@ struct GenerateArgs {
   bool no_refine = false;
   int steps = 0;  // 0: each stage's own
   std::string json_path;
+  IsomerStepArgs isomer;
   MeshOutputArgs output;
 };
 
@@ -28,6 +30,7 @@ void run(const GenerateArgs& a) {
   request.network = a.network.resolved();
   request.refine = !a.no_refine;
   if (a.steps > 0) request.multiview.steps = request.normals.steps = a.steps;
+  apply_isomer_step_options(a.isomer, request.reconstruct);
   apply_mesh_output_options(a.output, request.reconstruct, request.texture_format);
   const GenerateSummary s = generate(request);
   const ReconstructSummary& r = s.reconstruction;
@@ -73,6 +76,21 @@ const CommandRegistration registration{
       sub.add_flag("--official-scale", r.official_output_scale,
                    "Scale the output by 0.675 like the official release (default: the views' frame, unscaled)");
       sub.add_option("--json", a->json_path, "Also write the summary (stages, times, memory, files) to this JSON file");
+      sub.add_option("--multiview-size", r.multiview.size,
+                     "Side of the four views the multi-view model draws; it was trained at this default, and "
+                     "smaller is faster and worse")
+          ->capture_default_str()
+          ->check(CLI::Range(16, 4096));
+      sub.add_option("--refine-size", r.refine_options.size,
+                     "Side of the 2x2 grid of views the refinement redraws (each view comes back at half of it)")
+          ->capture_default_str()
+          ->check(CLI::Range(32, 8192));
+      sub.add_option("--normal-size", r.normals.size,
+                     "Side of the normal model's input and output; it was trained at this default, and smaller "
+                     "is faster and worse")
+          ->capture_default_str()
+          ->check(CLI::Range(16, 4096));
+      add_isomer_step_options(sub, a->isomer);
       add_mesh_output_options(sub, a->output, r.reconstruct);
       return [a] { run(*a); };
     }};

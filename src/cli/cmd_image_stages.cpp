@@ -45,7 +45,7 @@ const CommandRegistration refine{
       RefineRequest& r = a->request;
       sub.add_option("views_dir", r.views_dir, "Folder with {front,right,back,left}_rgb.png (as `multiview` writes)")
           ->required();
-      sub.add_option("-o,--output", r.output_dir, "Output folder: the refined {view}_rgb.png (512 px)")->required();
+      sub.add_option("-o,--output", r.output_dir, "Output folder: the refined {view}_rgb.png (512 px by default)")->required();
       sub.add_option("--front", r.front, "The object photo on a transparent background, which the IP-Adapter sees")
           ->required();
       add_network_options(sub, a->network);
@@ -55,6 +55,10 @@ const CommandRegistration refine{
       sub.add_option("--strength", r.options.strength, "How much of the schedule runs (0.2 redraws fine detail only)")
           ->capture_default_str()
           ->check(number_in(0.0, 1.0));
+      sub.add_option("--size", r.options.size, "Side of the 2x2 grid of views the pass redraws (each view comes "
+                                               "back at half of it)")
+          ->capture_default_str()
+          ->check(CLI::Range(32, 8192));
       return [a] {
         RefineRequest request = a->request;
         request.network = a->network.resolved();

@@ -13,7 +13,7 @@ struct MultiViewArgs {
 };
 
 const CommandRegistration registration{
-    "multiview", "Generate four views (front, right, back, left; 256 px) of an object photo", [](CLI::App& sub) {
+    "multiview", "Generate four views (front, right, back, left; 256 px by default) of an object photo", [](CLI::App& sub) {
       auto args = std::make_shared<MultiViewArgs>();
       MultiViewRequest& r = args->request;
       sub.add_option("image", r.image, "The object on a transparent background (RGBA PNG)")->required();
@@ -23,6 +23,10 @@ const CommandRegistration registration{
       sub.add_option("--guidance", r.options.guidance_scale, "Classifier-free guidance scale")
           ->capture_default_str()
           ->check(number_in(0.0, 100.0));
+      sub.add_option("--size", r.options.size,
+                     "Side of the views; the model was trained at this default, and smaller is faster and worse")
+          ->capture_default_str()
+          ->check(CLI::Range(16, 4096));
       return [args] {
         MultiViewRequest request = args->request;
         request.network = args->network.resolved();

@@ -31,7 +31,12 @@ const CommandRegistration registration{
       sub.add_option("--guidance", r.options.guidance_scale, "Classifier-free guidance scale")
           ->capture_default_str()
           ->check(number_in(0.0, 100.0));
-      sub.add_flag("--no-upscale", args->no_upscale, "Keep the normal maps at the model's 512 px (no Real-ESRGAN x4)");
+      sub.add_option("--size", r.options.size,
+                     "Side of the model's input and output; it was trained at this default, and smaller is "
+                     "faster and worse")
+          ->capture_default_str()
+          ->check(CLI::Range(16, 4096));
+      sub.add_flag("--no-upscale", args->no_upscale, "Keep the normal maps at the model's size (--size; no Real-ESRGAN x4)");
       return [args] {
         NormalRequest request = args->request;
         if (!args->front.empty()) request.front = args->front;

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "cli/command.h"
+#include "cli/isomer_options.h"
 #include "cli/mesh_output_options.h"
 #include "core/view_set.h"
 #include "pipeline/reconstruct.h"
@@ -15,8 +16,7 @@ struct ReconstructArgs {
   std::string normal_space = "world";
   bool init_only = false;
   std::string refine_target = "multiview";
-  int coarse_steps = -1;  // -1: the schedule's own
-  int refine_steps = -1;
+  IsomerStepArgs steps;
   MeshOutputArgs output;
   ReconstructRequest request;
 };
@@ -28,8 +28,7 @@ ReconstructRequest make_request(const ReconstructArgs& args) {
   r.normal_space = parse_normal_space(args.normal_space);
   ReconstructOptions& o = r.options;
   if (o.sphere_init) o.coarse = CoarseStageOptions::from_sphere();
-  if (args.coarse_steps >= 0) o.coarse.steps = args.coarse_steps;
-  if (args.refine_steps >= 0) o.refine.steps = args.refine_steps;
+  apply_isomer_step_options(args.steps, o);
   o.refine.target = args.refine_target == "multiview" ? RefineTarget::MultiView
                     : args.refine_target == "explicit" ? RefineTarget::ExplicitTarget
                                                        : RefineTarget::WhereViewsDisagree;
@@ -87,11 +86,6 @@ const CommandRegistration registration{
           ->capture_default_str()
           ->check(CLI::Range(4, 1024))
           ->needs(visual_hull);
-      sub.add_flag_function(
-             "--no-silhouette-fit", [args](int64_t) { args->request.options.silhouette_fit.enabled = false; },
-             "Ablation: never fit the mesh to the visual hull of the masks (neither the initial mesh nor the "
-             "optimised one)")
-          ->excludes(visual_hull);
       sub.add_option("--refine-target", args->refine_target,
                      "What the refinement pulls each view's normals toward: 'multiview' (the view's own map; the "
                      "default, best on exact and on smoothly disagreeing views in docs/evaluation.md), 'explicit' "
@@ -112,16 +106,10 @@ const CommandRegistration registration{
                    "Start the coarse stage from a sphere (official sphere schedule) instead of the initial mesh")
           ->excludes(init_only)
           ->excludes(visual_hull);
-      sub.add_option("--coarse-steps", args->coarse_steps,
-                     "Steps of the coarse stage (default: " + std::to_string(CoarseStageOptions{}.steps) + ")")
-          ->check(CLI::Range(0, 100000))
-          ->excludes(init_only)
-          ->excludes(visual_hull);
-      sub.add_option("--refine-steps", args->refine_steps,
-                     "Steps of the refinement stage (default: " + std::to_string(RefineStageOptions{}.steps) + ")")
-          ->check(CLI::Range(0, 100000))
-          ->excludes(init_only)
-          ->excludes(visual_hull);
+      add_isomer_step_options(sub, args->steps);
+      args->steps.no_fit->excludes(visual_hull);
+      for (CLI::Option* steps : {args->steps.coarse, args->steps.refine})
+        steps->excludes(init_only)->excludes(visual_hull);
       sub.add_option("--refine-resolution", o.refine.render_resolution,
                      "Longest side the refinement renders the views at; larger normal maps are downsampled "
                      "(0 = the maps' own)")
