@@ -13,7 +13,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   zlib1g-dev libicu-dev libpng-dev libjpeg-dev
   libcpp-httplib-dev libzip-dev chromium
-  python3-dev pybind11-dev python3-numpy python3-pytest
+  python3-dev pybind11-dev python3-numpy python3-pytest python3-pil
 )
 
 SUDO=""

@@ -15,10 +15,13 @@
 #include <string>
 
 #include "core/error.h"
+#include "core/memory.h"
+#include "core/parallel.h"
 #include "core/view_set.h"
 #include "eval/eval_report.h"
 #include "eval/evaluate.h"
 #include "io/mesh_io.h"
+#include "nn/runtime.h"
 #include "pipeline/doctor.h"
 #include "pipeline/generate.h"
 #include "pipeline/reconstruct.h"
@@ -232,6 +235,17 @@ py::dict read_intermediates(const std::filesystem::path& folder) {
 
 // The photo argument of generate: a path, or an image array (numpy, or anything numpy.asarray takes,
 // such as a PIL image) written losslessly into `scratch` for the facade to read.
+// A PIL image in a mode other than RGB or RGBA (grey, palette, 16-bit grey, ...) converted to RGBA when
+// it has transparency and to RGB when not; anything else as it is.
+py::object pil_as_rgb_or_rgba(const py::object& image) {
+  if (!py::hasattr(image, "mode") || !py::hasattr(image, "convert") || !py::hasattr(image, "info")) return image;
+  const std::string mode = py::str(image.attr("mode"));
+  if (mode == "RGB" || mode == "RGBA") return image;
+  const bool alpha = mode.find('A') != std::string::npos || mode.find('a') != std::string::npos ||
+                     image.attr("info").contains("transparency");
+  return image.attr("convert")(alpha ? "RGBA" : "RGB");
+}
+
 std::filesystem::path photo_argument(const py::object& image, const TemporaryFolder& scratch) {
   if (py::isinstance<py::str>(image) || py::hasattr(image, "__fspath__")) return fspath(image);
   py::object array = image;
@@ -239,7 +253,7 @@ std::filesystem::path photo_argument(const py::object& image, const TemporaryFol
     if (!py::hasattr(image, "__array_interface__") && !py::hasattr(image, "__array__"))
       throw py::type_error("image must be a path, a numpy array or a PIL image, got " +
                            std::string(py::str(image.get_type().attr("__name__"))));
-    array = py::module_::import("numpy").attr("ascontiguousarray")(image);
+    array = py::module_::import("numpy").attr("ascontiguousarray")(pil_as_rgb_or_rgba(image));
   }
   const bool eight_bit = py::isinstance<py::array_t<uint8_t>>(array);
   const Image photo = image_from_array(array, "image", 3, 4);
@@ -353,6 +367,11 @@ PYBIND11_MODULE(unique3d, m) {
   m.doc() = "Unique3D: one photo to a textured 3D mesh (ISOMER reconstruction, diffusion networks on libtorch).";
   m.attr("__version__") = UNIQUE3D_VERSION;
   set_progress_quiet(true);
+  // The run-time set-up of the command (cli/main.cpp): the same kernels, threads and allocator, so that a
+  // run gives the command's numbers bit for bit. UNIQUE3D_THREADS sets the thread count, as for the command.
+  keep_freed_memory_for_reuse();
+  configure_threads();
+  nn::configure_torch_threads();
 
   // The exception types live as long as the module (its attributes hold them).
   static PyObject* error_type = PyErr_NewExceptionWithDoc(

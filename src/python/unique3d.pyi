@@ -139,7 +139,8 @@ def generate(image: Union[PathLike, ImageArray, Any], *, models: PathLike, outpu
              cancel: Optional[CancelToken] = None) -> Result:
     """The whole method, as ``unique3d generate``: a photo to a mesh.
 
-    image: a PNG/JPEG path, an H x W x 3 or 4 array (uint8 or float32 in [0, 1]) or a PIL image.
+    image: a PNG/JPEG path, an H x W x 3 or 4 array (uint8 or float32 in [0, 1]) or a PIL image
+    (grey and palette images are converted to RGB, or RGBA when they have transparency).
     models: the model folder (docs/models.md). seed: of the diffusion noise (default 1145, the
     official app's). steps: denoising steps of the multi-view and normal models (default 30 each).
     dtype: precision of the networks (default: the CPU's). refine: False resizes the views instead of

@@ -72,6 +72,69 @@ def test_generate_from_a_path_and_from_an_array(tiny, tmp_path):
     assert not np.array_equal(unique3d.read_image(other / "multiview" / "front_rgb.png"), inter["multiview/front_rgb"])
 
 
+def small_cli_options():
+    """SMALL as the command's options."""
+    flags = []
+    for key, value in SMALL.items():
+        if key == "silhouette_fit":
+            flags.append("--no-silhouette-fit")
+        else:
+            flags += ["--" + key.replace("_", "-"), str(value)]
+    return flags
+
+
+def test_generate_gives_the_commands_files(tiny, tmp_path):
+    """A PIL image in, refinement on: the same intermediates and the byte-identical GLB the command writes
+    from the photo's file with the same seed and options."""
+    from PIL import Image
+    from conftest import run_cli
+
+    models, photo = tiny
+    run_cli("generate", photo, "-o", tmp_path / "cli.glb", "--models", models, "--seed", 11,
+            "--keep-intermediates", tmp_path / "cli", *small_cli_options())
+    with Image.open(photo) as pil:
+        assert pil.mode == "RGBA"
+        result = unique3d.generate(pil, models=models, seed=11, keep_intermediates=tmp_path / "py",
+                                   output=tmp_path / "py.glb", **SMALL)
+    assert (tmp_path / "py.glb").read_bytes() == (tmp_path / "cli.glb").read_bytes()
+    files = sorted(p.relative_to(tmp_path / "cli") for p in (tmp_path / "cli").rglob("*.png"))
+    assert len(files) == 1 + 4 * 4 + 4  # the photo, four stages' four views, and the four normal maps
+    assert files == sorted(p.relative_to(tmp_path / "py") for p in (tmp_path / "py").rglob("*.png"))
+    for name in files:
+        assert np.array_equal(unique3d.read_image(tmp_path / "cli" / name), unique3d.read_image(tmp_path / "py" / name)), name
+    assert [s["name"] for s in result.summary["stages"]] == STAGES
+
+
+def test_generate_takes_grey_and_palette_pil_images(tiny, tmp_path):
+    """PIL images in other modes are converted: grey to RGB (a photo without alpha, which is matted), a
+    palette with a transparent background index to RGBA; each is prepared as the converted file is (the
+    runs stop once the prepared photo is kept)."""
+    from PIL import Image
+
+    def stop_at_multiview(event):
+        if event.kind == "stage_begin" and event.text == "multi-view generation":
+            raise KeyError("prepared")
+
+    models, photo = tiny
+    with Image.open(photo) as pil:
+        rgba = pil.copy()
+    grey = rgba.convert("L")
+    palette = rgba.convert("RGB").quantize(16)
+    palette.info["transparency"] = palette.getpixel((0, 0))
+    prepared = {}
+    for name, image, mode in [("grey", grey, "RGB"), ("palette", palette, "RGBA")]:
+        image.convert(mode).save(tmp_path / f"{name}.png")
+        for source in ("pil", "file"):
+            kept = tmp_path / f"{name}_{source}"
+            with pytest.raises(KeyError, match="prepared"):
+                unique3d.generate(image if source == "pil" else tmp_path / f"{name}.png", models=models,
+                                  keep_intermediates=kept, progress=stop_at_multiview, **SMALL)
+            prepared[name, source] = unique3d.read_image(kept / "front.png")
+        assert np.array_equal(prepared[name, "pil"], prepared[name, "file"]), name
+    # The palette's transparent index is the background the grey photo had to have matted away.
+    assert not np.array_equal(prepared["grey", "pil"][..., 3], prepared["palette", "pil"][..., 3])
+
+
 def test_generate_cancels_and_checks_its_arguments(tiny, tmp_path):
     models, photo = tiny
     token = unique3d.CancelToken()
