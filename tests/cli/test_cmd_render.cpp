@@ -75,6 +75,24 @@ TEST_F(RenderCliTest, WritesFourViewsMatchingRenderView) {
   EXPECT_FALSE(fs::exists(dir / "out" / "turntable_003.png"));
 }
 
+// At elevation 0 a turntable of four frames passes through the four views: frame 0 is the front view and
+// frame 2 the back one, frames 1 and 3 the right and left ones (in the turntable's direction of turn), each
+// the very image the views got.
+TEST_F(RenderCliTest, FourFrameTurntableAtElevationZeroIsTheFourViews) {
+  write_mesh(test::bumpy_cube(), dir / "cube.obj");
+  ASSERT_EQ(run((dir / "cube.obj").string() + " -o " + (dir / "out").string() + " --res 48 --turntable 4 --elevation 0"),
+            0)
+      << log();
+  auto load = [&](const std::string& name) { return load_image_rgba(dir / "out" / name); };
+  auto same = [&](const Image& a, const Image& b) { return max_abs_difference(a, b) <= 1.f / 255 + 1e-6f; };
+  EXPECT_TRUE(same(load("turntable_000.png"), load("front_rgb.png")));
+  EXPECT_TRUE(same(load("turntable_002.png"), load("back_rgb.png")));
+  EXPECT_FALSE(same(load("right_rgb.png"), load("left_rgb.png")));  // the cube's bumps tell them apart
+  const Image first = load("turntable_001.png"), third = load("turntable_003.png");
+  EXPECT_TRUE((same(first, load("right_rgb.png")) && same(third, load("left_rgb.png"))) ||
+              (same(first, load("left_rgb.png")) && same(third, load("right_rgb.png"))));
+}
+
 // Against closed forms, not the renderer: a sphere scaled to fill 0.9 (radius 0.9 of the views' half
 // width 1) covers pi 0.9^2 / 4 = 63.6 % of each view, and faces each camera at the image centre.
 TEST_F(RenderCliTest, SphereCoversItsAnalyticAreaInEveryView) {
