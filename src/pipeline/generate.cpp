@@ -207,6 +207,7 @@ struct Run {
       case kReconstruct: {
         ReconstructRequest r;
         r.output = request.output;
+        r.previews = request.previews;
         r.options = request.reconstruct;
         r.official_output_scale = request.official_output_scale;
         r.texture_format = request.texture_format;

@@ -35,6 +35,7 @@ struct GenerateRequest {
   std::filesystem::path image;   // the photo (PNG/JPEG; RGBA with the object on transparency, or not); not
                                  // read, and may be empty, when resuming from_intermediates
   std::filesystem::path output;  // .glb, .obj or .ply; empty: none written (the summary holds the mesh)
+  bool previews = false;         // as ReconstructRequest: also <stem>_views.png and <stem>_turntable.png
   NetworkOptions network;
   bool refine = true;                        // false: the views are resized instead of refined
   std::filesystem::path keep_intermediates;  // empty: none written
