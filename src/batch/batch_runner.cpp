@@ -168,7 +168,6 @@ BatchReport run_batch(const std::vector<BatchInput>& inputs, const BatchSpec& sp
   std::optional<ProgressScope> scope;
   if (listener) scope.emplace(listener);
   const Clock::time_point start = Clock::now();
-  ensure_directory(spec.output);
   const bool photos = std::any_of(inputs.begin(), inputs.end(), [](const BatchInput& i) { return i.mode == BatchMode::Generate; });
   nlohmann::json models;
   if (photos) {
@@ -177,13 +176,15 @@ BatchReport run_batch(const std::vector<BatchInput>& inputs, const BatchSpec& sp
   }
   if (!spec.reconstruct.output.empty() || !spec.generate.output.empty())
     throw Error("internal: a batch's requests name their outputs themselves");
+  ensure_directory(spec.output);
 
   BatchReport report;
   for (size_t i = 0; i < inputs.size(); ++i) {
     const BatchInput& input = inputs[i];
     ObjectReport object;
     object.input = input;
-    const std::string label = "[" + std::to_string(i + 1) + "/" + std::to_string(inputs.size()) + "] " + input.name;
+    std::string label = "[";
+    label.append(std::to_string(i + 1)).append("/").append(std::to_string(inputs.size())).append("] ").append(input.name);
     const fs::path failed = object_failed_file(spec.output, input.name);
     const Clock::time_point object_start = Clock::now();
     fs::path tmp;

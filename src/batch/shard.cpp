@@ -38,8 +38,8 @@ Shard parse_shard(const std::string& text) {
 }
 
 SchedulerEnvironment SchedulerEnvironment::from_process() {
-  return {std::getenv("SLURM_ARRAY_TASK_ID"), std::getenv("SLURM_ARRAY_TASK_MIN"),
-          std::getenv("SLURM_ARRAY_TASK_COUNT"), std::getenv("JOB_COMPLETION_INDEX")};
+  return {std::getenv("SLURM_ARRAY_TASK_ID"), std::getenv("SLURM_ARRAY_TASK_COUNT"),
+          std::getenv("JOB_COMPLETION_INDEX")};
 }
 
 Shard resolve_shard(const std::optional<Shard>& given, std::optional<int> count, const SchedulerEnvironment& env) {
@@ -49,7 +49,6 @@ Shard resolve_shard(const std::optional<Shard>& given, std::optional<int> count,
   std::string source;
   if (env.slurm_task_id) {
     index = environment_number(env.slurm_task_id, "SLURM_ARRAY_TASK_ID");
-    if (env.slurm_task_min) *index -= environment_number(env.slurm_task_min, "SLURM_ARRAY_TASK_MIN");
     if (!count && env.slurm_task_count) count = int(environment_number(env.slurm_task_count, "SLURM_ARRAY_TASK_COUNT"));
     source = "SLURM_ARRAY_TASK_ID";
   } else if (env.completion_index) {
@@ -58,8 +57,9 @@ Shard resolve_shard(const std::optional<Shard>& given, std::optional<int> count,
   }
   if (!index) return {0, count.value_or(1)};
   require(count.has_value(), source + " is set but the number of shards is not: give --shards N");
-  require(*index >= 0 && *index < *count, source + " gives shard " + std::to_string(*index) + ", not one of the " +
-                                              std::to_string(*count) + " shards (0.." + std::to_string(*count - 1) + ")");
+  require(*index < *count, source + " gives shard " + std::to_string(*index) + ", not one of the " +
+                               std::to_string(*count) + " shards (0.." + std::to_string(*count - 1) +
+                               "): run the array as 0-(N-1), or give --shards N");
   return {int(*index), *count};
 }
 

@@ -25,16 +25,16 @@ Shard parse_shard(const std::string& text);
 // The variables a scheduler sets for one task of an array, as getenv gives them (null: unset).
 struct SchedulerEnvironment {
   const char* slurm_task_id = nullptr;     // SLURM_ARRAY_TASK_ID
-  const char* slurm_task_min = nullptr;    // SLURM_ARRAY_TASK_MIN
   const char* slurm_task_count = nullptr;  // SLURM_ARRAY_TASK_COUNT
   const char* completion_index = nullptr;  // JOB_COMPLETION_INDEX (Kubernetes Indexed Job)
   static SchedulerEnvironment from_process();
 };
 
 // The shard a worker runs: `given` (--shard I/N) when set; else the scheduler's task index with `count`
-// (--shards N) as N when given, else SLURM_ARRAY_TASK_COUNT; else 0/1. Slurm's index counts from
-// SLURM_ARRAY_TASK_MIN. An Error for a malformed variable, an index without a count (a Kubernetes
-// index needs --shards), or an index outside the count.
+// (--shards N) as N when given, else SLURM_ARRAY_TASK_COUNT; else 0/1. The task index is the shard
+// index, so an array runs as --array=0-(N-1), and a resubmission of some of its indices (--array=3) with
+// --shards N runs the same shards. An Error for a malformed variable, an index without a count (a
+// Kubernetes index needs --shards), or an index outside the count.
 Shard resolve_shard(const std::optional<Shard>& given, std::optional<int> count, const SchedulerEnvironment& env);
 
 // A 64-bit hash of `text` that is the same on every machine and every run (FNV-1a, then a mixing step).
