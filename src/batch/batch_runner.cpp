@@ -104,7 +104,7 @@ nlohmann::json check_models(const GenerateRequest& generate) {
 }
 
 // One object's run into the folder `dir`: the facade's call, and done.json's stages.
-nlohmann::json run_object(const BatchInput& input, const BatchSpec& spec, const fs::path& dir) {
+nlohmann::json run_object(const BatchInput& input, const BatchSpec& spec, const fs::path& dir, NetworkCache& networks) {
   nlohmann::json record;
   if (input.mode == BatchMode::Reconstruct) {
     ReconstructRequest request = spec.reconstruct;
@@ -121,7 +121,7 @@ nlohmann::json run_object(const BatchInput& input, const BatchSpec& spec, const 
     request.image = input.path;
     request.output = dir / kMeshFile;
     request.previews = true;
-    const GenerateSummary s = generate(request);
+    const GenerateSummary s = generate(request, nullptr, &networks);
     const nlohmann::json summary = summary_json(s);
     record["stages"] = summary["stages"];
     record["precision"] = summary["precision"];
@@ -179,6 +179,7 @@ BatchReport run_batch(const std::vector<BatchInput>& inputs, const BatchSpec& sp
   ensure_directory(spec.output);
 
   BatchReport report;
+  NetworkCache networks;
   for (size_t i = 0; i < inputs.size(); ++i) {
     const BatchInput& input = inputs[i];
     ObjectReport object;
@@ -191,7 +192,7 @@ BatchReport run_batch(const std::vector<BatchInput>& inputs, const BatchSpec& sp
     try {
       remove_leftovers(spec.output, input.name);
       object.input_sha256 = input_hash(input);
-      if (object_is_done(spec.output, input.name, object.input_sha256, spec.options)) {
+      if (object_is_done(spec.output, input.name, object.input_sha256, spec.options_for(input.mode))) {
         object.outcome = ObjectOutcome::Skipped;
         progress(label + ": done before, skipped");
         std::error_code ec;
@@ -204,15 +205,18 @@ BatchReport run_batch(const std::vector<BatchInput>& inputs, const BatchSpec& sp
       reset_peak_memory();
       tmp = spec.output / (temporary_prefix(input.name) + "partial-" + host_and_pid());
       fs::create_directories(tmp);
-      nlohmann::json done = run_object(input, spec, tmp);
+      const size_t loads_before = networks.loads();
+      nlohmann::json done = run_object(input, spec, tmp, networks);
+      object.networks_loaded = networks.loads() - loads_before;
       object.seconds = seconds_since(object_start);
       object.peak_memory_mib = peak_memory_mib();
       done["name"] = input.name;
       done["mode"] = batch_mode_name(input.mode);
       done["input"] = input_json(input, object.input_sha256);
-      done["options"] = spec.options;
+      done["options"] = spec.options_for(input.mode);
       done["program"] = program_json();
       done["models"] = input.mode == BatchMode::Generate ? models : nlohmann::json();
+      if (input.mode == BatchMode::Generate) done["models"]["networks_loaded"] = object.networks_loaded;
       done["total_seconds"] = object.seconds;
       done["peak_memory_mib"] = object.peak_memory_mib;
       nlohmann::json files = nlohmann::json::array();
@@ -247,7 +251,7 @@ BatchReport run_batch(const std::vector<BatchInput>& inputs, const BatchSpec& sp
                             {"input", input_json(input, object.input_sha256)},
                             {"error", object.error},
                             {"seconds", object.seconds},
-                            {"options", spec.options},
+                            {"options", spec.options_for(input.mode)},
                             {"program", program_json()}});
       } catch (const Error& write_error) {
         progress(label + ": " + write_error.what());
@@ -269,6 +273,7 @@ nlohmann::json batch_report_json(const BatchReport& report) {
                         {"sha256", o.input_sha256},
                         {"seconds", o.seconds},
                         {"peak_memory_mib", o.peak_memory_mib}};
+    if (o.input.mode == BatchMode::Generate) j["networks_loaded"] = o.networks_loaded;
     if (o.outcome == ObjectOutcome::Failed) j["error"] = o.error;
     objects.push_back(j);
   }

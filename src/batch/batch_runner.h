@@ -1,10 +1,12 @@
 #pragma once
 // Runs the objects of one shard of a batch (`unique3d batch`, docs/cluster.md) through the library facade:
-// view folders through reconstruct_folder, photos through generate (pipeline/generate.h). Each object
-// gets its own folder, filled under a temporary name and renamed when complete:
+// view folders through reconstruct_folder, photos through generate (pipeline/generate.h) with one
+// NetworkCache for the shard, so that each network is read once for all its photos where memory allows
+// (pipeline/network_cache.h). Each object gets its own folder, filled under a temporary name and renamed
+// when complete:
 //   OUT/<name>/  mesh.glb, mesh_views.png, mesh_turntable.png, done.json
 // done.json records the input (path and SHA-256), the options, the program's version, the model folder's
-// checks (photos), each stage's time and peak memory, and the files. An object whose done.json matches
+// checks and how many networks were read for it (photos), each stage's time and peak memory, and the files. An object whose done.json matches
 // its input's hash and the options is skipped; one that does not is redone and replaced. An object that
 // fails writes OUT/<name>.failed.json with the error and the batch goes on; a later run retries it.
 #include <filesystem>
@@ -25,9 +27,13 @@ struct BatchSpec {
   std::filesystem::path output;    // OUT, created when missing
   ReconstructRequest reconstruct;  // for view folders: all but views_dir, output and previews
   GenerateRequest generate;        // for photos: all but image, output and previews
-  // What the objects' results depend on (the command's options as given): done.json keeps it, and an
-  // object done with other options is redone.
-  nlohmann::json options = nlohmann::json::object();
+  // What the objects' results depend on (the command's options as given), per mode: done.json keeps
+  // them, and an object done with other options is redone.
+  nlohmann::json reconstruct_options = nlohmann::json::object();
+  nlohmann::json generate_options = nlohmann::json::object();
+  const nlohmann::json& options_for(BatchMode mode) const {
+    return mode == BatchMode::Generate ? generate_options : reconstruct_options;
+  }
 };
 
 enum class ObjectOutcome { Done, Skipped, Failed };
@@ -40,6 +46,7 @@ struct ObjectReport {
   std::string error;         // Failed: the message
   double seconds = 0.0;      // the object's run (0 when skipped)
   double peak_memory_mib = 0.0;  // the process's peak resident memory during the object's run
+  size_t networks_loaded = 0;    // photos: networks read from their files for this object (0: all kept)
 };
 
 struct BatchReport {

@@ -36,15 +36,19 @@ struct BatchArgs {
   NetworkArgs network;
   bool no_refine = false;
   int steps = 0;  // 0: each stage's own
-  nlohmann::json options = nlohmann::json::object();
+  nlohmann::json reconstruct_options, generate_options;  // given_options() of each mode
 };
 
-// The options the objects' results depend on, as given: every option but the batch's own.
-nlohmann::json given_options(const CLI::App& sub) {
+// The options the results of objects of `mode` depend on, as given: every option but the batch's own and
+// those of the other mode.
+nlohmann::json given_options(const CLI::App& sub, BatchMode mode) {
   static const std::set<std::string> own = {"inputs", "--output", "--shard", "--shards", "--jobs-file", "--json", "--help"};
+  static const std::set<std::string> photos_only = {"--models", "--dtype", "--seed", "--no-refine", "--steps"};
+  static const std::set<std::string> view_folders_only = {"--normal-space"};
+  const std::set<std::string>& other = mode == BatchMode::Generate ? view_folders_only : photos_only;
   nlohmann::json options = nlohmann::json::object();
   for (const CLI::Option* o : sub.get_options()) {
-    if (o->count() == 0 || own.count(o->get_name())) continue;
+    if (o->count() == 0 || own.count(o->get_name()) || other.count(o->get_name())) continue;
     const std::vector<std::string>& values = o->results();
     options[o->get_name()] = values.size() == 1 ? nlohmann::json(values[0]) : nlohmann::json(values);
   }
@@ -67,7 +71,8 @@ void write_jobs_file(const BatchArgs& a, const std::vector<BatchInput>& all, con
                      shard.to_string() + ", " + std::to_string(mine.size()) + " of " + std::to_string(all.size()) +
                      " objects\n# name\tmode\tstate\tinput\n";
   for (const BatchInput& input : mine) {
-    const bool done = object_is_done(a.output, input.name, input_hash(input), a.options);
+    const nlohmann::json& options = input.mode == BatchMode::Generate ? a.generate_options : a.reconstruct_options;
+    const bool done = object_is_done(a.output, input.name, input_hash(input), options);
     text += input.name + "\t" + batch_mode_name(input.mode) + "\t" + (done ? "done" : "todo") + "\t" +
             input.path.string() + "\n";
   }
@@ -88,7 +93,8 @@ void run(const BatchArgs& a) {
 
   BatchSpec spec;
   spec.output = a.output;
-  spec.options = a.options;
+  spec.reconstruct_options = a.reconstruct_options;
+  spec.generate_options = a.generate_options;
   spec.reconstruct = make_reconstruct_request(a.reconstruct);
   GenerateRequest& g = spec.generate;
   g.network = a.network.resolved();
@@ -140,7 +146,8 @@ const CommandRegistration registration{
       sub.add_option("--steps", a->steps, "Photos: denoising steps of the multi-view and normal models (default: 30 each)")
           ->check(CLI::Range(1, 1000));
       return [a, &sub] {
-        a->options = given_options(sub);
+        a->reconstruct_options = given_options(sub, BatchMode::Reconstruct);
+        a->generate_options = given_options(sub, BatchMode::Generate);
         run(*a);
       };
     }};
