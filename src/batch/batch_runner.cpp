@@ -174,8 +174,6 @@ BatchReport run_batch(const std::vector<BatchInput>& inputs, const BatchSpec& sp
     require(!spec.generate.network.models.empty(), "the batch has photos: give the model folder with --models");
     models = check_models(spec.generate);
   }
-  if (!spec.reconstruct.output.empty() || !spec.generate.output.empty())
-    throw Error("internal: a batch's requests name their outputs themselves");
   ensure_directory(spec.output);
 
   BatchReport report;

@@ -19,9 +19,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Small reconstructions: a few seconds each.
+// Small reconstructions of 64 px views: about a second each.
 const std::string kOptions =
-    " --coarse-steps 10 --refine-steps 5 --texture-size 256 --faces 1000 --visibility-resolution 256";
+    " --coarse-steps 5 --refine-steps 3 --texture-size 128 --faces 500 --visibility-resolution 128 --no-silhouette-fit";
 
 std::string file_bytes(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -39,34 +39,32 @@ CliResult run_cli(const std::string& args, const fs::path& log) {
   return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, file_bytes(log)};
 }
 
-// The bundled example and the test object rendered at six framings each: 12 view sets.
+// View sets of the bundled example and the test object, each rendered at 64 px with a framing (--fill).
 class BatchCli : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() {
-    dir = new fs::path(testing::fresh_temp_dir("cli_batch"));
-    const std::map<std::string, std::string> meshes = {
-        {"spot", std::string(UNIQUE3D_SOURCE_DIR) + "/examples/spot/spot.obj"},
-        {"avocado", std::string(UNIQUE3D_TEST_DATA) + "/objects/avocado/avocado.obj"}};
-    for (const auto& [name, mesh] : meshes)
-      for (const char* fill : {"0.5", "0.6", "0.7", "0.8", "0.85", "0.9"}) {
-        const std::string set = name + "_" + fill;
-        names->push_back(set);
-        const CliResult r = run_cli("-q render " + mesh + " -o " + (*dir / "in" / set).string() + " --res 96 --fill " + fill,
-                                    *dir / "render.log");
-        ASSERT_EQ(r.status, 0) << r.output;
-      }
-  }
+  static void SetUpTestSuite() { dir = new fs::path(testing::fresh_temp_dir("cli_batch")); }
   static void TearDownTestSuite() {
     fs::remove_all(*dir);
     delete dir;
   }
+  // Renders in/<object>_<fill> and returns its name.
+  static std::string view_set(const std::string& object, const std::string& fill) {
+    const std::string mesh = object == "spot" ? std::string(UNIQUE3D_SOURCE_DIR) + "/examples/spot/spot.obj"
+                                              : std::string(UNIQUE3D_TEST_DATA) + "/objects/avocado/avocado.obj";
+    const std::string name = object + "_" + fill;
+    const CliResult r =
+        run_cli("-q render " + mesh + " -o " + (*dir / "in" / name).string() + " --res 64 --fill " + fill, *dir / "render.log");
+    EXPECT_EQ(r.status, 0) << r.output;
+    return name;
+  }
   static fs::path* dir;
-  static std::vector<std::string>* names;
 };
 fs::path* BatchCli::dir = nullptr;
-std::vector<std::string>* BatchCli::names = new std::vector<std::string>;
 
 TEST_F(BatchCli, ThreeShardsInThreeProcessesGiveTheMeshesOfSingleRuns) {
+  std::vector<std::string> names;
+  for (const char* object : {"spot", "avocado"})
+    for (const char* fill : {"0.5", "0.6", "0.7", "0.8", "0.85", "0.9"}) names.push_back(view_set(object, fill));
   const fs::path out = *dir / "out";
   std::ostringstream script;
   script << "bash -c '";
@@ -94,7 +92,7 @@ TEST_F(BatchCli, ThreeShardsInThreeProcessesGiveTheMeshesOfSingleRuns) {
   }
   ASSERT_EQ(done_by.size(), 12u);
 
-  for (const std::string& name : *names) {
+  for (const std::string& name : names) {
     const fs::path single = *dir / (name + ".glb");
     const CliResult r = run_cli("-q --threads 1 reconstruct " + (*dir / "in" / name).string() + " -o " + single.string() + kOptions,
                                 *dir / "single.log");
@@ -127,8 +125,9 @@ TEST_F(BatchCli, ThreeShardsInThreeProcessesGiveTheMeshesOfSingleRuns) {
 TEST_F(BatchCli, FailedObjectsSetTheExitStatusAndTheOthersAreDone) {
   const fs::path in = *dir / "mixed", out = *dir / "mixed_out";
   fs::create_directories(in);
-  fs::copy(*dir / "in" / "spot_0.7", in / "spot");
-  fs::copy(*dir / "in" / "spot_0.7", in / "broken");
+  const std::string set = view_set("spot", "0.7");
+  fs::copy(*dir / "in" / set, in / "spot");
+  fs::copy(*dir / "in" / set, in / "broken");
   std::ofstream(in / "broken" / "back_rgb.png", std::ios::trunc) << "not a png";
   const CliResult r = run_cli("batch " + in.string() + " -o " + out.string() + kOptions, *dir / "mixed.log");
   EXPECT_EQ(r.status, 1) << r.output;
@@ -140,12 +139,13 @@ TEST_F(BatchCli, FailedObjectsSetTheExitStatusAndTheOthersAreDone) {
 }
 
 TEST_F(BatchCli, BadInputsAreErrorsBeforeAnyOutput) {
+  const std::string set = view_set("spot", "0.5");
   const fs::path out = *dir / "bad_out";
   const std::map<std::string, std::string> cases = {
       {(*dir / "nothing").string(), "do not exist"},
       {(*dir / "in").string() + " --shard 3/3", "I must be less than N"},
       {(*dir / "in").string() + " --shard 1", "give it as I/N"},
-      {(*dir / "in" / "spot_0.5").string(), "is a view folder itself"},
+      {(*dir / "in" / set).string(), "is a view folder itself"},
   };
   for (const auto& [args, message] : cases) {
     const CliResult r = run_cli("batch " + args + " -o " + out.string(), *dir / "bad.log");
@@ -156,7 +156,7 @@ TEST_F(BatchCli, BadInputsAreErrorsBeforeAnyOutput) {
   }
   // Photos need the model folder: said before anything is written.
   fs::create_directories(*dir / "photos");
-  fs::copy_file(*dir / "in" / "spot_0.5" / "front_rgb.png", *dir / "photos" / "spot.png");
+  fs::copy_file(*dir / "in" / set / "front_rgb.png", *dir / "photos" / "spot.png");
   const CliResult r = run_cli("batch " + (*dir / "photos").string() + " -o " + out.string(), *dir / "bad.log");
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_NE(r.output.find("--models"), std::string::npos) << r.output;
