@@ -14,6 +14,7 @@ PACKAGES=(
   zlib1g-dev libicu-dev libpng-dev libjpeg-dev
   libcpp-httplib-dev libzip-dev chromium
   python3-dev pybind11-dev python3-numpy python3-pytest python3-pil
+  libssl-dev slurm-wlm munge
 )
 
 SUDO=""

@@ -37,6 +37,12 @@ inline CLI::Validator number_in(double lo, double hi) {
       "NUMBER in " + range.str());
 }
 
+// Thrown by an action whose outcome is an exit status of its own (`batch`: how many objects failed);
+// main() returns it after the command printed its summary.
+struct ExitStatus {
+  int code = 0;
+};
+
 struct CommandRegistration {
   CommandRegistration(std::string name, std::string description, CommandSetup setup) {
     command_registry().push_back({std::move(name), std::move(description), std::move(setup)});

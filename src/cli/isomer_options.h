@@ -1,6 +1,7 @@
 #pragma once
-// The ISOMER schedule options shared by `reconstruct` and `generate`: --coarse-steps, --refine-steps
-// and --no-silhouette-fit. `reconstruct` adds its ablations on top (cmd_reconstruct.cpp).
+// The ISOMER schedule options shared by `reconstruct` (and `batch`: cli/reconstruct_options.h) and
+// `generate`: --coarse-steps, --refine-steps and --no-silhouette-fit. `reconstruct` adds its ablations
+// on top.
 #include <CLI/CLI.hpp>
 
 #include "isomer/reconstruct.h"

@@ -52,6 +52,8 @@ int main(int argc, char** argv) {
   try {
     for (auto& [sub, action] : actions)
       if (sub->parsed()) action();
+  } catch (const cli::ExitStatus& s) {
+    return s.code;
   } catch (const Error& e) {
     std::fprintf(stderr, "unique3d: error: %s\n", e.what());
     return 1;

@@ -12,10 +12,10 @@ NetworkOptions NetworkArgs::resolved() const {
   return o;
 }
 
-void add_network_options(CLI::App& sub, NetworkArgs& args, bool seeded) {
+void add_network_options(CLI::App& sub, NetworkArgs& args, bool seeded, bool models_required) {
   sub.add_option("--models", args.options.models,
                  "Folder with the network weights: the official release's ckpt/ folder (docs/models.md)")
-      ->required();
+      ->required(models_required);
   sub.add_option("--dtype", args.dtype,
                  "Precision of the networks: auto (bf16 on CPUs with avx512_bf16, else fp32), fp32, bf16, or fp16 "
                  "(CUDA only: on the CPU it is refused)")

@@ -15,8 +15,9 @@ struct NetworkArgs {
   NetworkOptions resolved() const;
 };
 
-// --models and --dtype, and --seed for the stages that draw noise.
-void add_network_options(CLI::App& sub, NetworkArgs& args, bool seeded = true);
+// --models (required unless `models_required` is false: `batch` needs it only for photos) and --dtype, and
+// --seed for the stages that draw noise.
+void add_network_options(CLI::App& sub, NetworkArgs& args, bool seeded = true, bool models_required = true);
 
 // "time: load 1.2 s, multi-view 30.1 s, ..., total ...; bf16; peak memory 2100 MiB" and the files written.
 void print_stage_summary(const NetworkStageSummary& summary);

@@ -19,4 +19,9 @@ void keep_freed_memory_for_reuse();
 // memory stays resident, and the next network's allocations, of other sizes, grow the heap beside it.
 void release_freed_memory();
 
+// The memory the process can still take, in MiB: the kernel's MemAvailable, or less where the process's
+// cgroup (v2: a Slurm or Kubernetes memory limit) has a limit with less left under it. 0 when neither
+// can be read.
+double available_memory_mib();
+
 }  // namespace u3d

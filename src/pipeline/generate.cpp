@@ -101,9 +101,10 @@ std::array<std::string, 4> view_names(bool normal) {
 
 // One run of the stages: what they hand each other, and the report.
 struct Run {
-  explicit Run(const GenerateRequest& r) : request(r) {}
+  Run(const GenerateRequest& r, NetworkCache* c) : request(r), cache(c) {}
 
   const GenerateRequest& request;
+  NetworkCache* cache;
   GenerateSummary summary;
   Image front;                 // prepare's output, the front view of the view set
   std::array<Image, 4> views;  // multiview's, refine's, upscale's outputs in turn
@@ -145,7 +146,7 @@ struct Run {
     switch (stage) {
       case kPrepare: {
         NetworkStageSummary st;
-        front = run_prepare_stage(*photo, request.network, st);
+        front = run_prepare_stage(*photo, request.network, st, cache);
         photo.reset();
         keep({{"front.png", &front}});
         report(stage, st.total_seconds(), false);
@@ -153,7 +154,7 @@ struct Run {
       }
       case kMultiView: {
         NetworkStageSummary s;
-        views = run_multiview_stage(front, request.network, request.multiview, s);
+        views = run_multiview_stage(front, request.network, request.multiview, s, cache);
         keep_views(stage);
         report(stage, s.total_seconds(), false);
         break;
@@ -161,7 +162,7 @@ struct Run {
       case kRefine: {
         if (request.refine) {
           NetworkStageSummary st;
-          views = run_refine_stage(views, front, request.network, request.refine_options, st);
+          views = run_refine_stage(views, front, request.network, request.refine_options, st, cache);
           report(stage, st.total_seconds(), false);
         } else {
           StageTimer timer("resizing the views to 512 px");
@@ -177,7 +178,7 @@ struct Run {
         std::vector<Image> inputs(views.begin() + 1, views.end());
         const bool small_front = front.width <= kSuperResolveMaxWidth;
         if (small_front) inputs.push_back(front);
-        std::vector<Image> upscaled = run_upscale_stage(inputs, request.network, st);
+        std::vector<Image> upscaled = run_upscale_stage(inputs, request.network, st, cache);
         for (size_t i = 1; i < 4; ++i) views[i] = std::move(upscaled[i - 1]);
         if (small_front) front = std::move(upscaled[3]);
         views[size_t(View::Front)] = front;
@@ -192,7 +193,7 @@ struct Run {
         NetworkStageSummary s;
         std::array<Image, 4> inputs = std::move(views);
         inputs[size_t(View::Front)] = std::move(front);
-        const ViewSetImages set = run_normal_stage(inputs, request.network, request.normals, s);
+        const ViewSetImages set = run_normal_stage(inputs, request.network, request.normals, s, cache);
         std::vector<std::pair<fs::path, const Image*>> images;
         for (View v : kAllViews) {
           images.push_back({stage_folder(stage) / view_file_name(v, false), &set.rgb[size_t(v)]});
@@ -207,6 +208,7 @@ struct Run {
       case kReconstruct: {
         ReconstructRequest r;
         r.output = request.output;
+        r.previews = request.previews;
         r.options = request.reconstruct;
         r.official_output_scale = request.official_output_scale;
         r.texture_format = request.texture_format;
@@ -234,7 +236,7 @@ const std::vector<std::string>& generate_stage_names() {
   return names;
 }
 
-GenerateSummary generate(const GenerateRequest& request, ProgressListener* listener) {
+GenerateSummary generate(const GenerateRequest& request, ProgressListener* listener, NetworkCache* cache) {
   std::optional<ProgressScope> scope;
   if (listener) scope.emplace(listener);
   if (!request.output.empty()) check_mesh_output(request.output);
@@ -281,7 +283,7 @@ GenerateSummary generate(const GenerateRequest& request, ProgressListener* liste
   if (start <= kNormals) networks.push_back(Network::kNormals);
   require_networks(ModelFolder(request.network.models), networks);
 
-  Run run(request);
+  Run run(request, cache);
   run.summary.precision = resolve_precision(request.network);
   for (int s = kPrepare; s < kStageCount; ++s) {
     if (s >= start) {

@@ -9,7 +9,8 @@
 //   upscale    the views to 2048 px (Real-ESRGAN x4)                          -> upscaled/
 //   normals    a normal map per view, masks, world space: the view set        -> views/
 //   reconstruct ISOMER on the view set                                        -> the output mesh
-// Each network stage loads its models when it starts and frees them when it ends. With
+// Each network stage loads its models when it starts and frees them when it ends, unless the caller
+// passes a NetworkCache that keeps them for its next run (pipeline/network_cache.h). With
 // keep_intermediates every stage's outputs are written to that folder as it finishes; with
 // from_intermediates the run resumes after the last stage whose outputs are all in that folder.
 #include <filesystem>
@@ -20,6 +21,7 @@
 #include "isomer/reconstruct.h"
 #include "pipeline/image_stages.h"
 #include "pipeline/multiview_stage.h"
+#include "pipeline/network_cache.h"
 #include "pipeline/network_stage.h"
 #include "pipeline/normal_stage.h"
 #include "pipeline/reconstruct.h"
@@ -35,6 +37,7 @@ struct GenerateRequest {
   std::filesystem::path image;   // the photo (PNG/JPEG; RGBA with the object on transparency, or not); not
                                  // read, and may be empty, when resuming from_intermediates
   std::filesystem::path output;  // .glb, .obj or .ply; empty: none written (the summary holds the mesh)
+  bool previews = false;         // as ReconstructRequest: also <stem>_views.png and <stem>_turntable.png
   NetworkOptions network;
   bool refine = true;                        // false: the views are resized instead of refined
   std::filesystem::path keep_intermediates;  // empty: none written
@@ -67,6 +70,8 @@ const std::vector<std::string>& generate_stage_names();
 
 // Checks the request, the photo and the model files of the stages that will run before any long work
 // (Error naming the file or value), runs the stages, and writes the mesh only after all succeeded.
-GenerateSummary generate(const GenerateRequest& request, ProgressListener* listener = nullptr);
+// With `networks`, the stages take their networks from it and leave them there for the next run.
+GenerateSummary generate(const GenerateRequest& request, ProgressListener* listener = nullptr,
+                         NetworkCache* networks = nullptr);
 
 }  // namespace u3d

@@ -31,12 +31,20 @@ void check_image_output(const std::filesystem::path& output) {
 
 }  // namespace
 
-Image run_prepare_stage(const Image& photo, const NetworkOptions& network, NetworkStageSummary& summary) {
+Image run_prepare_stage(const Image& photo, const NetworkOptions& network, NetworkStageSummary& summary,
+                        NetworkCache* cache) {
   const ModelFolder folder(network.models);
   summary.precision = resolve_precision(network);
   StageTimer timer("preparing the photo");
-  const nn::InputPhotoModels models{[&] { return nn::UpscaleModel::load(folder.upscaler(), summary.precision); },
-                                    [&] { return nn::MattingModel::load(folder.matting(), summary.precision); }};
+  const nn::InputPhotoModels models{
+      [&]() -> std::shared_ptr<nn::UpscaleModel> {
+        if (cache) return cache->upscaler(folder, summary.precision);
+        return nn::UpscaleModel::load(folder.upscaler(), summary.precision);
+      },
+      [&]() -> std::shared_ptr<nn::MattingModel> {
+        if (cache) return cache->matting(folder, summary.precision);
+        return nn::MattingModel::load(folder.matting(), summary.precision);
+      }};
   const Image front = tensor_to_image(nn::prepare_input_photo(image_to_uint8(photo), models, false));
   summary.timings.push_back({"prepare", timer.finish()});
   summary.peak_memory_mib = peak_memory_mib();
@@ -45,26 +53,28 @@ Image run_prepare_stage(const Image& photo, const NetworkOptions& network, Netwo
 
 std::array<Image, 4> run_refine_stage(const std::array<Image, 4>& views, const Image& front,
                                       const NetworkOptions& network, const RefineOptions& options,
-                                      NetworkStageSummary& summary) {
+                                      NetworkStageSummary& summary, NetworkCache* cache) {
   const ModelFolder folder(network.models);
   summary.precision = resolve_precision(network);
   nn::RefineSettings settings;
   settings.size = options.size;
   settings.steps = options.steps;
   settings.strength = options.strength;
-  settings.free_networks_as_done = true;
+  settings.free_networks_as_done = !cache;
   // The encoders run once and are freed before the denoising models load (nn/pipelines/unique3d_refine.h).
   StageTimer encode_timer("encoding the prompt, the front view and the views");
   std::vector<torch::Tensor> inputs;
   for (const Image& view : views) inputs.push_back(image_to_uint8(composite_over_white(view)));
-  nn::RefineConditioning conditioning =
-      nn::RefineEncoders::load(refine_checkpoints(folder), summary.precision)
-          ->encode(inputs, image_to_uint8(composite_over_white(front)), settings);
+  std::shared_ptr<nn::RefineEncoders> encoders = cache ? cache->refine_encoders(folder, summary.precision)
+                                                       : nn::RefineEncoders::load(refine_checkpoints(folder), summary.precision);
+  nn::RefineConditioning conditioning = encoders->encode(inputs, image_to_uint8(composite_over_white(front)), settings);
+  encoders.reset();
   release_freed_memory();  // the encoders
   summary.timings.push_back({"refinement encoders", encode_timer.finish()});
 
   StageTimer load_timer("loading the refinement models");
-  auto model = nn::RefineModel::load(refine_checkpoints(folder), summary.precision);
+  std::shared_ptr<nn::RefineModel> model = cache ? cache->refine_model(folder, summary.precision)
+                                                 : nn::RefineModel::load(refine_checkpoints(folder), summary.precision);
   summary.timings.push_back({"load refinement models", load_timer.finish()});
 
   StageTimer timer("refining the views");
@@ -80,11 +90,12 @@ std::array<Image, 4> run_refine_stage(const std::array<Image, 4>& views, const I
 }
 
 std::vector<Image> run_upscale_stage(const std::vector<Image>& images, const NetworkOptions& network,
-                                     NetworkStageSummary& summary) {
+                                     NetworkStageSummary& summary, NetworkCache* cache) {
   const ModelFolder folder(network.models);
   summary.precision = resolve_precision(network);
   StageTimer load_timer("loading the upscaler");
-  auto model = nn::UpscaleModel::load(folder.upscaler(), summary.precision);
+  std::shared_ptr<nn::UpscaleModel> model = cache ? cache->upscaler(folder, summary.precision)
+                                                  : nn::UpscaleModel::load(folder.upscaler(), summary.precision);
   summary.timings.push_back({"load upscaler", load_timer.finish()});
   StageTimer timer("upscaling x4");
   std::vector<torch::Tensor> inputs;

@@ -4,7 +4,8 @@
 // colours on white, crop to the object and square; nn/pipelines/input_photo.h), the ControlNet-tile +
 // IP-Adapter refinement of the four views (nn/pipelines/unique3d_refine.h), Real-ESRGAN x4
 // (nn/pipelines/upscale.h) and background removal (nn/pipelines/matting.h); each loads its networks
-// when it starts and frees them when it ends. Plus the requests of the `upscale`, `matte` and `refine`
+// when it starts and frees them when it ends, or takes them from a NetworkCache that keeps them
+// (pipeline/network_cache.h). Plus the requests of the `upscale`, `matte` and `refine`
 // commands.
 #include <array>
 #include <filesystem>
@@ -13,12 +14,14 @@
 
 #include "core/image.h"
 #include "core/progress.h"
+#include "pipeline/network_cache.h"
 #include "pipeline/network_stage.h"
 
 namespace u3d {
 
 // photo: RGB(A) in [0, 1]. Returns the square RGBA front image the multi-view stage starts from.
-Image run_prepare_stage(const Image& photo, const NetworkOptions& network, NetworkStageSummary& summary);
+Image run_prepare_stage(const Image& photo, const NetworkOptions& network, NetworkStageSummary& summary,
+                        NetworkCache* cache = nullptr);
 
 struct RefineOptions {
   int size = 1024;        // side of the 2x2 grid the pass redraws; each view comes back at size / 2
@@ -30,11 +33,11 @@ struct RefineOptions {
 // the four refined views (RGB, options.size / 2 px).
 std::array<Image, 4> run_refine_stage(const std::array<Image, 4>& views, const Image& front,
                                       const NetworkOptions& network, const RefineOptions& options,
-                                      NetworkStageSummary& summary);
+                                      NetworkStageSummary& summary, NetworkCache* cache = nullptr);
 
 // Each image x4 (RGB or RGBA; alpha is upscaled too), one load of the upscaler for all.
 std::vector<Image> run_upscale_stage(const std::vector<Image>& images, const NetworkOptions& network,
-                                     NetworkStageSummary& summary);
+                                     NetworkStageSummary& summary, NetworkCache* cache = nullptr);
 
 struct ImageRequest {
   std::filesystem::path image;

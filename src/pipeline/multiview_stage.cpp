@@ -13,11 +13,13 @@
 
 namespace u3d {
 std::array<Image, 4> run_multiview_stage(const Image& front, const NetworkOptions& network,
-                                         const MultiViewOptions& options, NetworkStageSummary& summary) {
+                                         const MultiViewOptions& options, NetworkStageSummary& summary,
+                                         NetworkCache* cache) {
   const ModelFolder folder(network.models);
   summary.precision = resolve_precision(network);
   StageTimer load_timer("loading the multi-view model");
-  auto model = nn::MultiViewModel::load(folder.img2mvimg(), summary.precision);
+  std::shared_ptr<nn::MultiViewModel> model = cache ? cache->multiview(folder, summary.precision)
+                                                    : nn::MultiViewModel::load(folder.img2mvimg(), summary.precision);
   summary.timings.push_back({"load multi-view model", load_timer.finish()});
 
   StageTimer timer("multi-view generation");
@@ -25,7 +27,7 @@ std::array<Image, 4> run_multiview_stage(const Image& front, const NetworkOption
   settings.size = options.size;
   settings.steps = options.steps;
   settings.guidance_scale = options.guidance_scale;
-  settings.free_networks_as_done = true;
+  settings.free_networks_as_done = !cache;
   nn::SeededNoise noise(network.seed);
   const torch::Tensor views = model->run(nn::image_to_uint8_rgb(composite_over_white(front)), settings, noise);
   model.reset();

@@ -2,12 +2,13 @@
 // The facade's multi-view stage (`unique3d multiview`, and a stage of `generate`): the front image, the
 // object on a transparent background, in; the multi-view model's four 256 px views out, drawn as the
 // official app draws them (run_mvprediction: the image composited over white, 30 steps, guidance 1.5).
-// The model is loaded when the stage starts and freed when it ends.
+// The model is loaded when the stage starts and freed when it ends, or kept in a NetworkCache.
 #include <array>
 #include <filesystem>
 
 #include "core/image.h"
 #include "core/progress.h"
+#include "pipeline/network_cache.h"
 #include "pipeline/network_stage.h"
 
 namespace u3d {
@@ -18,9 +19,11 @@ struct MultiViewOptions {
   double guidance_scale = 1.5;
 };
 
-// front: RGB(A) in [0, 1]. Returns the four views, RGB, in View order (front, right, back, left).
+// front: RGB(A) in [0, 1]. Returns the four views, RGB, in View order (front, right, back, left). With
+// `cache` the model comes from it and stays there (pipeline/network_cache.h).
 std::array<Image, 4> run_multiview_stage(const Image& front, const NetworkOptions& network,
-                                         const MultiViewOptions& options, NetworkStageSummary& summary);
+                                         const MultiViewOptions& options, NetworkStageSummary& summary,
+                                         NetworkCache* cache = nullptr);
 
 struct MultiViewRequest {
   std::filesystem::path image;       // the object on a transparent background (RGBA PNG)

@@ -93,20 +93,23 @@ Image resized_square(const Image& image, int size) {
 }  // namespace
 
 ViewSetImages run_normal_stage(const std::array<Image, 4>& views, const NetworkOptions& network,
-                               const NormalOptions& options, NetworkStageSummary& summary) {
+                               const NormalOptions& options, NetworkStageSummary& summary, NetworkCache* cache) {
   const ModelFolder folder(network.models);
   summary.precision = resolve_precision(network);
   // The views are encoded before the UNets are read, so the CLIP encoder is freed by then
   // (nn/pipelines/unique3d_normal.h).
   StageTimer load_timer("loading the normal model's encoders");
-  auto model = nn::NormalModel::load_conditioning(folder.image_variations_for_normals(), folder.image2normal(),
-                                                  summary.precision);
+  // (A cached model keeps its encoder and UNets loaded together.)
+  std::shared_ptr<nn::NormalModel> model =
+      cache ? cache->normals(folder, summary.precision)
+            : nn::NormalModel::load_conditioning(folder.image_variations_for_normals(), folder.image2normal(),
+                                                 summary.precision);
   summary.timings.push_back({"load encoders", load_timer.finish()});
   nn::NormalSettings settings;
   settings.size = options.size;
   settings.steps = options.steps;
   settings.guidance_scale = options.guidance_scale;
-  settings.free_networks_as_done = true;
+  settings.free_networks_as_done = !cache;
   StageTimer encode_timer("encoding the views");
   std::vector<torch::Tensor> inputs;
   for (const Image& view : views) inputs.push_back(model_input(view, options.size));
@@ -126,7 +129,8 @@ ViewSetImages run_normal_stage(const std::array<Image, 4>& views, const NetworkO
   for (int64_t i = 0; i < maps.size(0); ++i) normal_maps.push_back(maps[i]);
   if (options.upscale) {
     StageTimer load_upscaler("loading the upscaler");
-    auto upscaler = nn::UpscaleModel::load(folder.upscaler(), summary.precision);
+    std::shared_ptr<nn::UpscaleModel> upscaler = cache ? cache->upscaler(folder, summary.precision)
+                                                       : nn::UpscaleModel::load(folder.upscaler(), summary.precision);
     summary.timings.push_back({"load upscaler", load_upscaler.finish()});
     StageTimer upscale_timer("upscaling the normal maps x4");
     std::vector<torch::Tensor> bytes;

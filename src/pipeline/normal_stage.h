@@ -7,13 +7,15 @@
 // colour differs from the corner pixel (0,0) by at most 80 in the sum of its three 8-bit channels is
 // background), and each map rotated from its view's camera space to world space. Masks: the front RGB
 // image keeps its own alpha and lends it to the front normal map; the other views take their normal
-// map's mask, eroded by one pixel. The model is loaded when the stage starts and freed when it ends.
+// map's mask, eroded by one pixel. The model is loaded when the stage starts and freed when it ends, or
+// kept in a NetworkCache (pipeline/network_cache.h).
 #include <array>
 #include <filesystem>
 #include <optional>
 
 #include "core/image.h"
 #include "core/progress.h"
+#include "pipeline/network_cache.h"
 #include "pipeline/network_stage.h"
 
 namespace u3d {
@@ -34,7 +36,8 @@ struct ViewSetImages {
 // views: RGB(A) in [0, 1], in View order; the front view should carry the object's alpha (else its mask
 // comes from its normal map too).
 ViewSetImages run_normal_stage(const std::array<Image, 4>& views, const NetworkOptions& network,
-                               const NormalOptions& options, NetworkStageSummary& summary);
+                               const NormalOptions& options, NetworkStageSummary& summary,
+                               NetworkCache* cache = nullptr);
 
 struct NormalRequest {
   std::filesystem::path views_dir;             // {front,right,back,left}_rgb.png

@@ -34,10 +34,11 @@ torch::Tensor colours_on_white(const torch::Tensor& rgba);
 // box), pad to a centred square with (255, 255, 255, 0). An Error when no pixel has alpha > 60.
 torch::Tensor simple_preprocess(const torch::Tensor& rgba);
 
-// The networks the chain may need, loaded by these functions only when it does and freed right after.
+// The networks the chain may need, got from these functions only when it does and let go right after
+// (freed, unless the caller keeps them too: pipeline/network_cache.h).
 struct InputPhotoModels {
-  std::function<std::unique_ptr<UpscaleModel>()> upscaler;
-  std::function<std::unique_ptr<MattingModel>()> matting;
+  std::function<std::shared_ptr<UpscaleModel>()> upscaler;
+  std::function<std::shared_ptr<MattingModel>()> matting;
 };
 
 // The whole chain on uint8 [H, W, 3|4]; returns the square uint8 RGBA the multi-view stage starts from.
