@@ -243,11 +243,12 @@ int main(int argc, char** argv) try {
     }
     torch::Tensor x = torch::randn({2, 4, 128, 128}), text = torch::randn({2, 77, 768});
     torch::Tensor context = adapter->context(text, torch::randn({2, 1024}));
+    // The pipeline embeds its control image (both halves) once a run (ControlNetModel::embed_condition).
     const torch::Tensor control_image = torch::rand({1, 3, 1024, 1024});
-    const torch::Tensor control = torch::cat({control_image, control_image});  // both halves, as the pipeline
+    const torch::Tensor control = controlnet->embed_condition(torch::cat({control_image, control_image}));
     const double before = resident_gb();
     const double s = timed_steps(repetitions, memory_profile, [&] {
-      ControlNetOutput residuals = controlnet->forward(x, torch::tensor(500.0f), text, control);
+      ControlNetOutput residuals = controlnet->forward_embedded(x, torch::tensor(500.0f), text, control);
       UNetExtras extras;
       extras.down_block_additional_residuals = std::move(residuals.down_block_res_samples);
       extras.mid_block_additional_residual = std::move(residuals.mid_block_res_sample);
