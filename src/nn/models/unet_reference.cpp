@@ -54,8 +54,10 @@ torch::Tensor ReferenceUNet::forward(const torch::Tensor& sample, const torch::T
   }
   // Groups whose reference inputs (condition latents, context, timestep) are identical share one
   // reference pass: each sample of the pass is computed on its own, so their recorded tokens would be
-  // identical too. With guidance the unconditional half gives every view zero condition latents and a
-  // zero context (nn/pipelines/image_diffusion.h), so its pass runs once instead of once a view.
+  // the same values (bit for bit in bf16; in fp32 ATen's convolutions round differently at another
+  // batch size, docs/networks.md). With guidance the unconditional half gives every view zero
+  // condition latents and a zero context (nn/pipelines/image_diffusion.h), so its pass runs once
+  // instead of once a view.
   std::vector<int64_t> distinct, row_of_group;
   for (int64_t g = 0; g < groups; ++g) {
     size_t row = 0;
