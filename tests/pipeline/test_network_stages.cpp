@@ -108,7 +108,7 @@ TEST(NetworkStages, StagePeakMemoryLeavesTheProcessPeakAlone) {
   {
     std::vector<char> block(size_t(300) << 20);  // 300 MiB, touched, held over many samples, then freed
     for (size_t i = 0; i < block.size(); i += 4096) block[i] = 1;
-    std::this_thread::sleep_for(std::chrono::milliseconds(20 * MemoryPeakWatch::kSampleMilliseconds));
+    std::this_thread::sleep_for(std::chrono::milliseconds(40 * MemoryPeakWatch::kSampleMilliseconds));
   }
   release_freed_memory();  // in case the allocator keeps freed memory (core/memory.h)
   MemoryPeakWatch after_block;
