@@ -60,7 +60,8 @@ int main(int argc, char** argv) try {
   std::printf("%-12s %10s %18s\n", "stage", "seconds", "peak memory MiB");
   for (const GenerateStageReport& stage : summary.stages)
     std::printf("%-12s %10.1f %18.0f\n", stage.name.c_str(), stage.seconds, stage.peak_memory_mib);
-  std::printf("%-12s %10.1f\n", "total", summary.total_seconds());
+  std::printf("%-12s %10.1f %18.0f  (the process's peak, as /usr/bin/time -v reports it)\n", "total",
+              summary.total_seconds(), summary.peak_memory_mib);
   return 0;
 } catch (const u3d::Error& e) {
   std::fprintf(stderr, "bench_pipeline: error: %s\n", e.what());

@@ -4,7 +4,8 @@
 //    (nn/pipelines/guidance.h), so the UNet sees two batches of 4 at 32x32 latents with joint attention
 //    over the 4 views, class labels and the concatenated condition latents;
 //  - normal (image2normal): the 4 views at 512 px, per guidance half a reference pass over the 4
-//    condition latents and the main UNet, each batch 4 at 64x64;
+//    condition latents and the main UNet, each batch 4 at 64x64 (the unconditional half's condition
+//    latents and context are zeros, as the pipeline's);
 //  - refine (SD 1.5 + tile ControlNet + IP-Adapter): the 1024 px grid with guidance as one doubled
 //    batch, the ControlNet and the UNet each batch 2 at 128x128 latents (16,384 tokens in the first
 //    level's self-attention), the UNet's context 77 text + 4 image tokens.
@@ -13,8 +14,10 @@
 // own; GB here are GiB). A full run is 30 steps each for the first two, 10 for refine.
 // --memory-profile adds the peak of the tensor memory the steps allocate beyond the weights, with the
 // ATen ops open when it is reached (libtorch's memory reports and op callbacks; it slows the steps).
+// --save=FILE writes each step's prediction (named multiview, normal, refine) to a safetensors file,
+// to compare two builds' outputs bit for bit (the weights and inputs come from a fixed seed).
 // Usage: bench_unique3d_steps [--dtype=fp32|bf16] [--repetitions=N] [--only=multiview|normal|refine]
-//                             [--memory-profile]
+//                             [--memory-profile] [--save=FILE]
 #include <sys/resource.h>
 #include <unistd.h>
 #include <ATen/record_function.h>
@@ -34,6 +37,7 @@
 
 #include "core/error.h"
 #include "nn/checkpoint/config_json.h"
+#include "nn/checkpoint/safetensors.h"
 #include "nn/layers/layers.h"
 #include "nn/layers/multiview_attention.h"
 #include "nn/models/controlnet.h"
@@ -159,9 +163,10 @@ int main(int argc, char** argv) try {
   int repetitions = 3;
   std::string only;
   bool memory_profile = false;
+  std::string save;
   const std::string usage =
       "usage: bench_unique3d_steps [--dtype=fp32|bf16] [--repetitions=N] [--only=multiview|normal|refine] "
-      "[--memory-profile]";
+      "[--memory-profile] [--save=FILE]";
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg.starts_with("--dtype="))
@@ -170,6 +175,8 @@ int main(int argc, char** argv) try {
       repetitions = std::max(1, std::stoi(arg.substr(14)));
     else if (arg == "--memory-profile")
       memory_profile = true;
+    else if (arg.starts_with("--save="))
+      save = arg.substr(7);
     else if (arg == "--only=multiview" || arg == "--only=normal" || arg == "--only=refine")
       only = arg.substr(7);
     else
@@ -181,6 +188,7 @@ int main(int argc, char** argv) try {
   c10::InferenceMode inference;
   const auto options = torch::TensorOptions().dtype(scalar_type(precision));
   torch::manual_seed(0);
+  TensorMap predictions;  // --save
 
   if (wanted("multiview")) {
     UNet2DConditionModel unet(manifest_config("unet_unique3d_img2mvimg"), options);
@@ -191,12 +199,12 @@ int main(int argc, char** argv) try {
     torch::Tensor condition = torch::randn({2, 4, 32, 32});
     const double before = resident_gb();
     const double s = timed_steps(repetitions, memory_profile, [&] {
-      guided_prediction(1.5, [&](GuidanceHalf half) {
+      predictions["multiview"] = guided_prediction(1.5, [&](GuidanceHalf half) {
         UNetExtras extras;
         extras.class_labels = torch::arange(4, torch::kLong);
         extras.condition_latents = batch_half(condition, half);
         return unet->forward(x, torch::tensor(500.0f), batch_half(context, half), extras);
-      });
+      }).combined;
     });
     std::printf("multi-view step (two halves of batch 4 at 32x32, 4 joint views)  %s: %6.2f s   resident before %.2f GB, peak RSS %.2f GB\n",
                 precision_name(precision), s, before, peak_rss_gb());
@@ -206,13 +214,15 @@ int main(int argc, char** argv) try {
     ReferenceUNet model(manifest_config("unet_unique3d_image2normal"), options);
     randomize_parameters(*model.unet, 0.02);  // the reference UNet is registered inside it
     set_precision(*model.unet, precision);
-    torch::Tensor x = torch::randn({4, 4, 64, 64}), context = torch::randn({8, 1, 768});
-    torch::Tensor condition = torch::randn({8, 4, 64, 64});
+    // As the pipeline: the unconditional half's context and condition latents are zeros.
+    torch::Tensor x = torch::randn({4, 4, 64, 64});
+    torch::Tensor context = torch::cat({torch::zeros({4, 1, 768}), torch::randn({4, 1, 768})});
+    torch::Tensor condition = torch::cat({torch::zeros({4, 4, 64, 64}), torch::randn({4, 4, 64, 64})});
     const double before = resident_gb();
     const double s = timed_steps(repetitions, memory_profile, [&] {
-      guided_prediction(1.5, [&](GuidanceHalf half) {
+      predictions["normal"] = guided_prediction(1.5, [&](GuidanceHalf half) {
         return model.forward(x, torch::tensor(500.0f), batch_half(context, half), batch_half(condition, half));
-      });
+      }).combined;
     });
     std::printf("normal step (4 views: reference + main, two halves of batch 4 at 64x64) %s: %6.2f s (%.2f s a view)"
                 "   resident before %.2f GB, peak RSS %.2f GB\n",
@@ -233,19 +243,22 @@ int main(int argc, char** argv) try {
     }
     torch::Tensor x = torch::randn({2, 4, 128, 128}), text = torch::randn({2, 77, 768});
     torch::Tensor context = adapter->context(text, torch::randn({2, 1024}));
-    torch::Tensor control = torch::rand({2, 3, 1024, 1024});
+    // The pipeline embeds its control image (both halves) once a run (ControlNetModel::embed_condition).
+    const torch::Tensor control_image = torch::rand({1, 3, 1024, 1024});
+    const torch::Tensor control = controlnet->embed_condition(torch::cat({control_image, control_image}));
     const double before = resident_gb();
     const double s = timed_steps(repetitions, memory_profile, [&] {
-      ControlNetOutput residuals = controlnet->forward(x, torch::tensor(500.0f), text, control);
+      ControlNetOutput residuals = controlnet->forward_embedded(x, torch::tensor(500.0f), text, control);
       UNetExtras extras;
       extras.down_block_additional_residuals = std::move(residuals.down_block_res_samples);
       extras.mid_block_additional_residual = std::move(residuals.mid_block_res_sample);
-      unet->forward(x, torch::tensor(500.0f), context, std::move(extras));
+      predictions["refine"] = unet->forward(x, torch::tensor(500.0f), context, std::move(extras));
     });
     std::printf("refine step (ControlNet + UNet with IP-Adapter, batch 2 at 128x128) %s: %6.2f s   resident before %.2f GB, peak RSS %.2f GB\n",
                 precision_name(precision), s, before, peak_rss_gb());
     print_allocator_stats();
   }
+  if (!save.empty()) save_safetensors(predictions, save);
   return 0;
 } catch (const std::exception& e) {
   std::fprintf(stderr, "bench_unique3d_steps: %s\n", e.what());

@@ -16,6 +16,7 @@
 #include "core/error.h"
 #include "core/memory.h"
 #include "pipeline/model_check.h"
+#include "pipeline/network_stage.h"
 #include "pipeline/summary_json.h"
 #include "unique3d/version.h"
 
@@ -200,14 +201,14 @@ BatchReport run_batch(const std::vector<BatchInput>& inputs, const BatchSpec& sp
       }
       progress(label + ": " + batch_mode_name(input.mode) + " " + input.path.string());
       release_freed_memory();
-      reset_peak_memory();
+      MemoryPeakWatch object_memory;  // (leaves the process's own peak, which the scheduler reads, alone)
       tmp = spec.output / (temporary_prefix(input.name) + "partial-" + host_and_pid());
       fs::create_directories(tmp);
       const size_t loads_before = networks.loads();
       nlohmann::json done = run_object(input, spec, tmp, networks);
       object.networks_loaded = networks.loads() - loads_before;
       object.seconds = seconds_since(object_start);
-      object.peak_memory_mib = peak_memory_mib();
+      object.peak_memory_mib = object_memory.peak_mib();
       done["name"] = input.name;
       done["mode"] = batch_mode_name(input.mode);
       done["input"] = input_json(input, object.input_sha256);

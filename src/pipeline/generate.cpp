@@ -109,6 +109,7 @@ struct Run {
   Image front;                 // prepare's output, the front view of the view set
   std::array<Image, 4> views;  // multiview's, refine's, upscale's outputs in turn
   std::optional<ViewSet> view_set;
+  std::optional<MemoryPeakWatch> stage_memory;  // the running stage's peak memory
 
   // Writes a stage's images into the intermediates folder when one is kept.
   void keep(const std::vector<std::pair<fs::path, const Image*>>& images) {
@@ -126,7 +127,7 @@ struct Run {
     keep(images);
   }
   void report(Stage stage, double seconds, bool resumed) {
-    summary.stages.push_back({generate_stage_names()[stage], seconds, resumed ? 0.0 : peak_memory_mib(), resumed});
+    summary.stages.push_back({generate_stage_names()[stage], seconds, resumed ? 0.0 : stage_memory->peak_mib(), resumed});
   }
 
   // Reads what `stage` handed on from the intermediates folder.
@@ -287,8 +288,8 @@ GenerateSummary generate(const GenerateRequest& request, ProgressListener* liste
   run.summary.precision = resolve_precision(request.network);
   for (int s = kPrepare; s < kStageCount; ++s) {
     if (s >= start) {
-      release_freed_memory();  // what the stage before left in the heap
-      reset_peak_memory();     // each stage reports its own peak
+      release_freed_memory();     // what the stage before left in the heap
+      run.stage_memory.emplace();  // each stage reports its own peak
       run.run(Stage(s), photo);
     } else {
       // The front image is needed to the end; the views only from the stage before the first to run.
@@ -296,6 +297,8 @@ GenerateSummary generate(const GenerateRequest& request, ProgressListener* liste
       run.report(Stage(s), 0.0, true);
     }
   }
+  run.stage_memory.reset();
+  run.summary.peak_memory_mib = peak_memory_mib();
   return run.summary;
 }
 

@@ -53,7 +53,8 @@ struct GenerateRequest {
 struct GenerateStageReport {
   std::string name;              // "prepare", "multiview", ...
   double seconds = 0.0;          // 0 when resumed
-  double peak_memory_mib = 0.0;  // the process's peak resident memory while the stage ran (0 when resumed)
+  double peak_memory_mib = 0.0;  // the process's peak resident memory while the stage ran (0 when resumed;
+                                 // MemoryPeakWatch, pipeline/network_stage.h)
   bool resumed = false;          // its outputs were read from from_intermediates
 };
 
@@ -62,6 +63,8 @@ struct GenerateSummary {
   std::vector<GenerateStageReport> stages;
   ReconstructSummary reconstruction;
   std::vector<std::filesystem::path> written;  // the mesh and the intermediates
+  // The process's peak resident memory when the run ended (VmHWM: what `/usr/bin/time -v` reports).
+  double peak_memory_mib = 0.0;
   double total_seconds() const;
 };
 

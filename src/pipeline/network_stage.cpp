@@ -1,11 +1,16 @@
 #include "pipeline/network_stage.h"
 
 #include <sys/resource.h>
+#include <unistd.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <fstream>
 #include <mutex>
 #include <string>
+#include <thread>
 
 #include "core/progress.h"
 #include "nn/precision.h"
@@ -43,9 +48,54 @@ double peak_memory_mib() {
   return double(usage.ru_maxrss) / 1024.0;
 }
 
-void reset_peak_memory() {
-  std::ofstream clear("/proc/self/clear_refs");
-  clear << "5";  // resets the peak resident set size (Linux >= 4.0); a failure leaves the old peak
+namespace {
+
+// The resident set now in MiB (/proc/self/statm), 0 where it is not readable.
+double resident_mib() {
+  std::ifstream statm("/proc/self/statm");
+  long total = 0, resident = 0;
+  if (!(statm >> total >> resident)) return 0.0;
+  return double(resident) * double(sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
+}
+
+}  // namespace
+
+struct MemoryPeakWatch::Sampler {
+  std::mutex mutex;
+  std::condition_variable wake;
+  bool stop = false;
+  double peak_mib = 0.0;
+  std::thread thread;
+
+  Sampler() : peak_mib(resident_mib()) {
+    thread = std::thread([this] {
+      std::unique_lock<std::mutex> lock(mutex);
+      while (!stop) {
+        peak_mib = std::max(peak_mib, resident_mib());
+        wake.wait_for(lock, std::chrono::milliseconds(kSampleMilliseconds));
+      }
+    });
+  }
+  double finish() {
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      stop = true;
+    }
+    wake.notify_all();
+    if (thread.joinable()) thread.join();
+    return std::max(peak_mib, resident_mib());
+  }
+  ~Sampler() { finish(); }
+};
+
+MemoryPeakWatch::MemoryPeakWatch() : sampler_(std::make_unique<Sampler>()), start_hwm_mib_(peak_memory_mib()) {}
+
+MemoryPeakWatch::~MemoryPeakWatch() = default;
+
+double MemoryPeakWatch::peak_mib() {
+  const double sampled = sampler_->finish();
+  const double hwm = peak_memory_mib();
+  return hwm > start_hwm_mib_ ? hwm : sampled;
 }
 
 Image composite_over_white(const Image& rgba) {

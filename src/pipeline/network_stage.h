@@ -4,6 +4,7 @@
 // 8-bit tensors the networks' preprocessing takes (the official code works on 8-bit PIL images).
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -35,14 +36,30 @@ struct NetworkStageSummary {
 // (once) when it runs slowly here: bf16 without avx512_bf16.
 nn::Precision resolve_precision(const NetworkOptions& options);
 
-// The process's peak resident memory in MiB since it started or since the last reset_peak_memory()
-// (the kernel's VmHWM; getrusage where /proc is not readable).
+// The process's peak resident memory in MiB since it started (the kernel's VmHWM, which is what
+// getrusage's ru_maxrss and `/usr/bin/time -v` report; getrusage where /proc is not readable).
 double peak_memory_mib();
 
-// Starts a new peak from the current resident memory (Linux's /proc/self/clear_refs), so that a run of
-// stages can report each stage's own peak; where the kernel does not allow it the peak keeps counting
-// from the start of the process.
-void reset_peak_memory();
+// The peak resident memory of one part of a run (a stage of `generate`), from construction to
+// peak_mib(). It leaves the kernel's record of the process's peak alone: resetting it
+// (/proc/self/clear_refs) would also reset what getrusage and `/usr/bin/time -v` report for the whole
+// process, which then gave only the last stage's peak. Exact when the part raised the process's peak
+// (VmHWM grew: the part's peak is the new VmHWM); otherwise the highest resident size a thread samples
+// every kSampleMilliseconds (/proc/self/statm), which can miss a peak shorter than that.
+class MemoryPeakWatch {
+ public:
+  static constexpr int kSampleMilliseconds = 5;
+  MemoryPeakWatch();
+  ~MemoryPeakWatch();
+  MemoryPeakWatch(const MemoryPeakWatch&) = delete;
+  MemoryPeakWatch& operator=(const MemoryPeakWatch&) = delete;
+  double peak_mib();  // stops the sampling
+
+ private:
+  struct Sampler;
+  std::unique_ptr<Sampler> sampler_;
+  double start_hwm_mib_ = 0.0;
+};
 
 // PIL's rgba_to_rgb of the official app: the image composited over white (Pillow's paste with its own
 // alpha as the mask, 8-bit arithmetic), as RGB. RGB images pass through.

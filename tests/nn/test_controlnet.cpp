@@ -37,6 +37,32 @@ TEST(ControlNet, ResidualsAndUNetWithResidualsMatchDiffusers) {
                          ref["unet_sample_out_with_residuals"], kForwardTolerance);
 }
 
+// The refinement embeds its control image once a run and gives that embedding to every step: the
+// residuals are forward()'s, bit for bit.
+TEST(ControlNet, AnEmbeddedControlImageGivesTheSameResiduals) {
+  torch::NoGradGuard no_grad;
+  ControlNetModel controlnet(ControlNetConfig::from_json(golden_config("controlnet"), "controlnet/config.json"),
+                             torch::TensorOptions());
+  load_golden_weights(*controlnet, "controlnet");
+  auto in = golden_tensors("controlnet", "inputs");
+  ControlNetOutput direct = controlnet->forward(in["sample"], in["timestep"], in["encoder_hidden_states"],
+                                                in["controlnet_cond"]);
+  const torch::Tensor embedded = controlnet->embed_condition(in["controlnet_cond"]);
+  ControlNetOutput reused = controlnet->forward_embedded(in["sample"], in["timestep"], in["encoder_hidden_states"],
+                                                         embedded);
+  ASSERT_EQ(reused.down_block_res_samples.size(), direct.down_block_res_samples.size());
+  for (size_t i = 0; i < direct.down_block_res_samples.size(); ++i)
+    EXPECT_TRUE(torch::equal(reused.down_block_res_samples[i], direct.down_block_res_samples[i])) << i;
+  EXPECT_TRUE(torch::equal(reused.mid_block_res_sample, direct.mid_block_res_sample));
+  // An embedding of another batch size or resolution is refused.
+  EXPECT_THROW(controlnet->forward_embedded(in["sample"], in["timestep"], in["encoder_hidden_states"],
+                                            embedded.narrow(0, 0, 1)),
+               u3d::Error);
+  EXPECT_THROW(controlnet->forward_embedded(in["sample"], in["timestep"], in["encoder_hidden_states"],
+                                            embedded.narrow(3, 0, embedded.size(3) / 2)),
+               u3d::Error);
+}
+
 TEST(ControlNet, RejectsControlImageOfWrongSize) {
   ControlNetModel controlnet(ControlNetConfig::from_json(golden_config("controlnet"), "controlnet/config.json"),
                              torch::TensorOptions());

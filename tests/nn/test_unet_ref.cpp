@@ -2,6 +2,10 @@
 // pixel-wise reference attention on every attn1 (golden case unet_ref, reference weights = unet_base).
 #include <gtest/gtest.h>
 
+#include <map>
+#include <string>
+#include <vector>
+
 #include "golden.h"
 #include "nn/models/unet_reference.h"
 #include "nn/precision.h"
@@ -77,6 +81,111 @@ TEST_F(UNetRef, GroupsOfSamplesShareOneCondition) {
   torch::Tensor other = model->forward(in["sample"].narrow(0, 0, 1), in["timestep"], context,
                                        in["condition_latents"].narrow(0, 1, 1));
   EXPECT_GT(max_abs_diff(joint.narrow(0, 0, 1), other), 1e-3);
+}
+
+// Records the batch size of every call, by module name, and attends as usual.
+class CountingProcessor : public PlainAttentionProcessor {
+ public:
+  CountingProcessor(std::map<std::string, std::vector<int64_t>>& calls, std::string name)
+      : calls_(calls), name_(std::move(name)) {}
+  torch::Tensor process(AttentionImpl& attention, const torch::Tensor& x, const torch::Tensor& context) override {
+    calls_[name_].push_back(x.size(0));
+    return PlainAttentionProcessor::process(attention, x, context);
+  }
+
+ private:
+  std::map<std::string, std::vector<int64_t>>& calls_;
+  std::string name_;
+};
+
+// Counts the calls of every cross-attention (attn2) of the reference UNet, which the reference attention
+// leaves alone: they show how far the reference pass ran and on how many samples.
+std::map<std::string, std::vector<int64_t>>& count_reference_cross_attention(ReferenceUNet& model) {
+  static std::map<std::string, std::vector<int64_t>> calls;
+  calls.clear();
+  set_attention_processors(*model.reference, [](const std::string& name, const AttentionImpl&)
+                                                  -> std::shared_ptr<AttentionProcessor> {
+    if (!name.ends_with(".attn2")) return nullptr;
+    calls[name];
+    return std::make_shared<CountingProcessor>(calls, name);
+  });
+  return calls;
+}
+
+// The batch sizes of the counted modules that ran, each call in turn (a module that did not run is left out).
+std::vector<int64_t> batches_run(std::map<std::string, std::vector<int64_t>>& calls) {
+  std::vector<int64_t> all;
+  for (auto& [name, batches] : calls) {
+    all.insert(all.end(), batches.begin(), batches.end());
+    batches.clear();
+  }
+  return all;
+}
+
+// The reference pass stops at the last attn1 input it records: the last transformer block's
+// cross-attention (and all after it) never runs, every other one runs once; called alone, the
+// reference UNet still runs whole.
+TEST_F(UNetRef, ReferencePassStopsAtItsLastRecord) {
+  torch::NoGradGuard no_grad;
+  auto& calls = count_reference_cross_attention(*model);
+  ASSERT_EQ(calls.size(), 4u);
+  const std::string last = "up_blocks.1.attentions.1.transformer_blocks.0.attn2";
+  ASSERT_TRUE(calls.count(last));
+  TensorMap states;
+  torch::Tensor out = model->forward(in["sample"], in["timestep"], in["encoder_hidden_states"], in["condition_latents"],
+                                     &states);
+  EXPECT_CLOSE_TO_GOLDEN(out, ref["sample_out"], kForwardTolerance);
+  EXPECT_EQ(states.size(), 4u);
+  for (const auto& [name, batches] : calls) EXPECT_EQ(batches.size(), name == last ? 0u : 1u) << name;
+  for (auto& [name, batches] : calls) batches.clear();
+  model->reference->forward(in["condition_latents"], in["timestep"], in["encoder_hidden_states"]);
+  for (const auto& [name, batches] : calls) EXPECT_EQ(batches.size(), 1u) << name;
+  model->store->states.clear();
+}
+
+// Groups with identical condition latents, context and timestep share one reference pass (as the
+// unconditional half of guidance, where every view has zeros): the pass runs on the distinct groups
+// only, and every group reads exactly the tokens a pass over the distinct groups records.
+TEST_F(UNetRef, IdenticalGroupsShareOneReferencePass) {
+  torch::NoGradGuard no_grad;
+  auto& calls = count_reference_cross_attention(*model);
+  const torch::Tensor cond = in["condition_latents"], context = in["encoder_hidden_states"];
+  ASSERT_EQ(cond.size(0), 2);
+  TensorMap distinct_states;
+  model->forward(in["sample"], in["timestep"], context, cond, &distinct_states);
+  // Three of the four cross-attentions run (ReferencePassStopsAtItsLastRecord), on both groups.
+  const std::vector<int64_t> two_groups{2, 2, 2};
+  EXPECT_EQ(batches_run(calls), two_groups);
+
+  const torch::Tensor order = torch::tensor({0, 1, 0, 0}, torch::kLong);
+  const torch::Tensor sample = torch::cat({in["sample"], in["sample"]});
+  TensorMap states;
+  torch::Tensor out = model->forward(sample, in["timestep"], context.index_select(0, order),
+                                     cond.index_select(0, order), &states);
+  EXPECT_EQ(batches_run(calls), two_groups);
+  ASSERT_EQ(states.size(), distinct_states.size());
+  for (const auto& [name, tokens] : states) {
+    SCOPED_TRACE(name);
+    EXPECT_TRUE(torch::equal(tokens, distinct_states[name].index_select(0, order)));
+  }
+  // Each sample's output is that of its own condition, as when the groups differ.
+  torch::Tensor alone = model->forward(sample.narrow(0, 3, 1), in["timestep"], context.narrow(0, 0, 1),
+                                       cond.narrow(0, 0, 1));
+  EXPECT_LT(max_abs_diff(out.narrow(0, 3, 1), alone), 1e-5);
+  batches_run(calls);
+
+  // Four identical groups: one pass of one sample.
+  model->forward(sample, in["timestep"], context.narrow(0, 0, 1).repeat({4, 1, 1}),
+                 cond.narrow(0, 0, 1).repeat({4, 1, 1, 1}));
+  EXPECT_EQ(batches_run(calls), (std::vector<int64_t>{1, 1, 1}));
+  // -0 and +0 are not the same input: no sharing then (the tokens may differ in the sign of a zero).
+  const torch::Tensor zeros = torch::zeros_like(cond.narrow(0, 0, 1));
+  model->forward(in["sample"], in["timestep"], context.narrow(0, 0, 1).repeat({2, 1, 1}), torch::cat({zeros, zeros.neg()}));
+  EXPECT_EQ(batches_run(calls), two_groups);
+  // Nor are groups at different timesteps.
+  model->forward(in["sample"], torch::tensor({10.0f, 20.0f}), context.narrow(0, 0, 1).repeat({2, 1, 1}),
+                 cond.narrow(0, 0, 1).repeat({2, 1, 1, 1}));
+  EXPECT_EQ(batches_run(calls), two_groups);
 }
 
 TEST_F(UNetRef, Bf16StaysCloseToTheReference) {

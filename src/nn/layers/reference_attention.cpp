@@ -22,6 +22,7 @@ ReferenceWriteProcessor::ReferenceWriteProcessor(std::shared_ptr<ReferenceStore>
 torch::Tensor ReferenceWriteProcessor::process(AttentionImpl& attention, const torch::Tensor& x,
                                                const torch::Tensor& context) {
   store->states[name] = x;
+  if (store->stop_when_recorded && store->states.size() == store->writers) throw ReferencePassComplete{};
   return attention.attend(x, context.defined() ? context : x);
 }
 
@@ -58,7 +59,7 @@ torch::Tensor ReferenceReadProcessor::process(AttentionImpl& attention, const to
 
 size_t install_reference_attention(torch::nn::Module& main, torch::nn::Module& reference,
                                    const std::shared_ptr<ReferenceStore>& store, const torch::TensorOptions& options) {
-  set_attention_processors(reference, [&](const std::string& name, const AttentionImpl&) -> std::shared_ptr<AttentionProcessor> {
+  store->writers = set_attention_processors(reference, [&](const std::string& name, const AttentionImpl&) -> std::shared_ptr<AttentionProcessor> {
     if (!is_self_attention_name(name) || under_ref_unet(name)) return nullptr;
     return std::make_shared<ReferenceWriteProcessor>(store, name + ".processor");
   });

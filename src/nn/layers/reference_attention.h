@@ -21,7 +21,15 @@ namespace u3d::nn {
 // Tokens recorded by the reference pass, by processor name ("<attn1 module path>.processor").
 struct ReferenceStore {
   std::map<std::string, torch::Tensor> states;
+  size_t writers = 0;  // write processors recording into this store (install_reference_attention)
+  // When set, the write processor that completes `states` (every writer has recorded) ends the
+  // reference pass by throwing ReferencePassComplete instead of attending: nothing the pass computes
+  // after that input can reach a recorded token (ReferenceUNet::forward sets it and catches the throw).
+  bool stop_when_recorded = false;
 };
+
+// Thrown by the write processor that completes the store when stop_when_recorded is set.
+struct ReferencePassComplete {};
 
 class ReferenceWriteProcessor : public AttentionProcessor {
  public:
@@ -47,9 +55,9 @@ class ReferenceReadProcessor : public AttentionProcessor {
   Attention crosspond_attention{nullptr};
 };
 
-// Puts write processors (over `store`) on every attn1 of `reference` and read processors on every attn1
-// of `main`, named "<module path>.processor" as the official state dict does. Modules under a child
-// named "ref_unet" are left alone. Returns the number of modules changed in `main`.
+// Puts write processors (over `store`, counted in store->writers) on every attn1 of `reference` and read
+// processors on every attn1 of `main`, named "<module path>.processor" as the official state dict does.
+// Modules under a child named "ref_unet" are left alone. Returns the number of modules changed in `main`.
 size_t install_reference_attention(torch::nn::Module& main, torch::nn::Module& reference,
                                    const std::shared_ptr<ReferenceStore>& store, const torch::TensorOptions& options);
 

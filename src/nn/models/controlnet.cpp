@@ -82,22 +82,54 @@ ControlNetModelImpl::ControlNetModelImpl(const ControlNetConfig& c, const torch:
   mid_block = register_module("mid_block", UNetMidBlock(u, temb, t));
 }
 
-ControlNetOutput ControlNetModelImpl::forward(const torch::Tensor& sample, const torch::Tensor& timestep,
-                                              const torch::Tensor& encoder_hidden_states,
-                                              const torch::Tensor& controlnet_cond, double conditioning_scale) {
-  const UNetConfig& u = config.unet;
+namespace {
+
+void check_sample(const UNetConfig& u, const torch::Tensor& sample) {
   const int64_t factor = int64_t{1} << (u.block_out_channels.size() - 1);
-  const int64_t cond_factor = int64_t{1} << (config.conditioning_embedding_out_channels.size() - 1);
   if (sample.dim() != 4 || sample.size(1) != u.in_channels || sample.size(2) % factor || sample.size(3) % factor)
     throw Error("ControlNet: sample must be [N, " + std::to_string(u.in_channels) + ", h, w] with h, w multiples of " +
                 std::to_string(factor) + ", got " + c10::str(sample.sizes()));
+}
+
+}  // namespace
+
+torch::Tensor ControlNetModelImpl::embed_condition(const torch::Tensor& controlnet_cond) {
+  const int64_t cond_factor = int64_t{1} << (config.conditioning_embedding_out_channels.size() - 1);
+  if (controlnet_cond.dim() != 4 || controlnet_cond.size(1) != config.conditioning_channels ||
+      controlnet_cond.size(2) % cond_factor || controlnet_cond.size(3) % cond_factor)
+    throw Error("ControlNet: the control image must be [N, " + std::to_string(config.conditioning_channels) +
+                ", H, W] with H, W multiples of " + std::to_string(cond_factor) + ", got " +
+                c10::str(controlnet_cond.sizes()));
+  return controlnet_cond_embedding->forward(controlnet_cond.to(conv_in->weight.scalar_type()));
+}
+
+ControlNetOutput ControlNetModelImpl::forward(const torch::Tensor& sample, const torch::Tensor& timestep,
+                                              const torch::Tensor& encoder_hidden_states,
+                                              const torch::Tensor& controlnet_cond, double conditioning_scale) {
+  check_sample(config.unet, sample);
   const int64_t batch = sample.size(0);
+  const int64_t cond_factor = int64_t{1} << (config.conditioning_embedding_out_channels.size() - 1);
   if (controlnet_cond.dim() != 4 || controlnet_cond.size(0) != batch ||
       controlnet_cond.size(1) != config.conditioning_channels || controlnet_cond.size(2) != sample.size(2) * cond_factor ||
       controlnet_cond.size(3) != sample.size(3) * cond_factor)
     throw Error("ControlNet: the control image must be [" + std::to_string(batch) + ", " +
                 std::to_string(config.conditioning_channels) + ", " + std::to_string(sample.size(2) * cond_factor) + ", " +
                 std::to_string(sample.size(3) * cond_factor) + "], got " + c10::str(controlnet_cond.sizes()));
+  return forward_embedded(sample, timestep, encoder_hidden_states, embed_condition(controlnet_cond), conditioning_scale);
+}
+
+ControlNetOutput ControlNetModelImpl::forward_embedded(const torch::Tensor& sample, const torch::Tensor& timestep,
+                                                       const torch::Tensor& encoder_hidden_states,
+                                                       const torch::Tensor& embedded_cond, double conditioning_scale) {
+  const UNetConfig& u = config.unet;
+  check_sample(u, sample);
+  const int64_t batch = sample.size(0);
+  if (embedded_cond.dim() != 4 || embedded_cond.size(0) != batch ||
+      embedded_cond.size(1) != u.block_out_channels[0] || embedded_cond.size(2) != sample.size(2) ||
+      embedded_cond.size(3) != sample.size(3))
+    throw Error("ControlNet: the embedded control image must be [" + std::to_string(batch) + ", " +
+                std::to_string(u.block_out_channels[0]) + ", " + std::to_string(sample.size(2)) + ", " +
+                std::to_string(sample.size(3)) + "] (embed_condition), got " + c10::str(embedded_cond.sizes()));
   if (encoder_hidden_states.dim() != 3 || encoder_hidden_states.size(0) != batch)
     throw Error("ControlNet: encoder_hidden_states must be [" + std::to_string(batch) + ", L, C], got " +
                 c10::str(encoder_hidden_states.sizes()));
@@ -110,7 +142,7 @@ ControlNetOutput ControlNetModelImpl::forward(const torch::Tensor& sample, const
           .to(compute);
   const torch::Tensor emb = time_embedding->forward(t_emb);
 
-  torch::Tensor h = conv_in->forward(sample.to(compute)) + controlnet_cond_embedding->forward(controlnet_cond.to(compute));
+  torch::Tensor h = conv_in->forward(sample.to(compute)) + embedded_cond.to(compute);
   std::vector<torch::Tensor> skips{h};
   for (auto& block : down_blocks) h = block->forward(h, emb, context, skips);
   h = mid_block->forward(h, emb, context);

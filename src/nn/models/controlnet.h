@@ -52,6 +52,16 @@ class ControlNetModelImpl : public torch::nn::Module {
                            const torch::Tensor& encoder_hidden_states, const torch::Tensor& controlnet_cond,
                            double conditioning_scale = 1.0);
 
+  // forward() in two parts. embed_condition: the control image [N, 3, h*f, w*f] through
+  // controlnet_cond_embedding, in the model's dtype, [N, C, h, w]; it depends on nothing else, so a
+  // control image that stays the same over a pipeline's steps is embedded once. forward_embedded: the
+  // rest, with the embedding of the batch's control images. (Not one image's embedding for a whole
+  // batch: in fp32 the convolutions round differently at another batch size.)
+  torch::Tensor embed_condition(const torch::Tensor& controlnet_cond);
+  ControlNetOutput forward_embedded(const torch::Tensor& sample, const torch::Tensor& timestep,
+                                    const torch::Tensor& encoder_hidden_states, const torch::Tensor& embedded_cond,
+                                    double conditioning_scale = 1.0);
+
   ControlNetConfig config;
   Conv2d conv_in{nullptr};
   TimestepEmbedding time_embedding{nullptr};

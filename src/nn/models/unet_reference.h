@@ -24,8 +24,9 @@ class ReferenceUNet {
   // sample [N, C, H, W], timestep 0-dim or [N], encoder_hidden_states [N, L, D], condition_latents
   // [B, C, H, W] with N a multiple of B (N/B consecutive samples share one condition, e.g. the two
   // halves of classifier-free guidance or the views of one object). The reference pass runs on
-  // (condition_latents, the first timestep and context of each group); its output is discarded. When
-  // `reference_states` is given it receives the recorded tokens by processor name.
+  // (condition_latents, the first timestep and context of each group), once for groups whose three are
+  // identical, and stops at the last input it records: its output would be discarded. When
+  // `reference_states` is given it receives the recorded tokens by processor name, [B, L, C] each.
   torch::Tensor forward(const torch::Tensor& sample, const torch::Tensor& timestep,
                         const torch::Tensor& encoder_hidden_states, const torch::Tensor& condition_latents,
                         TensorMap* reference_states = nullptr);

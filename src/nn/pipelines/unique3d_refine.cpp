@@ -197,7 +197,10 @@ torch::Tensor RefineModel::run(const RefineConditioning& conditioning, const Ref
   ip_adapter->set_scale(s.ip_adapter_scale);
 
   const torch::Tensor unet_context = ip_adapter->context(prompt_embeds, conditioning.image_embeds);
-  const torch::Tensor control = guidance ? torch::cat({conditioning.control, conditioning.control}) : conditioning.control;
+  // The control image is the same at every step: its embedding (both guidance halves, as the doubled
+  // batch) is computed once, where diffusers' ControlNet recomputes it every step.
+  const torch::Tensor control = controlnet->embed_condition(
+      guidance ? torch::cat({conditioning.control, conditioning.control}) : conditioning.control);
 
   // img2img start (diffusers' get_timesteps): the schedule for all steps, entered at step `start`.
   auto* sigma_scheduler = dynamic_cast<SigmaScheduler*>(scheduler.get());
@@ -215,7 +218,7 @@ torch::Tensor RefineModel::run(const RefineConditioning& conditioning, const Ref
     record("latents." + std::to_string(i - start), latents);
     const torch::Tensor input = scheduler->scale_model_input(guidance ? torch::cat({latents, latents}) : latents, i);
     const torch::Tensor t = scheduler->timestep(i);
-    ControlNetOutput residuals = controlnet->forward(input, t, prompt_embeds, control, s.conditioning_scale);
+    ControlNetOutput residuals = controlnet->forward_embedded(input, t, prompt_embeds, control, s.conditioning_scale);
     UNetExtras extras;
     extras.down_block_additional_residuals = std::move(residuals.down_block_res_samples);
     extras.mid_block_additional_residual = std::move(residuals.mid_block_res_sample);
