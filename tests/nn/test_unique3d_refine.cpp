@@ -1,7 +1,8 @@
 // The refinement stage loaded from folders in the official layouts (Stable Diffusion 1.5 base, Unique3D's
 // ckpt/controlnet-tile, h94/IP-Adapter), made of tiny models: the golden UNet, VAE, CLIP image encoder
 // and IP-Adapter, plus a seeded random text encoder (the tokenizer's full vocabulary, 16 wide to fit the
-// UNet) and ControlNet (one conditioning downsampling to fit the tiny VAE). It runs end to end.
+// UNet) and ControlNet (one conditioning downsampling to fit the tiny VAE). It runs end to end and
+// reproduces the official pipeline's trace (tests/data/nn/refine_trace).
 #include "nn/pipelines/unique3d_refine.h"
 
 #include <gtest/gtest.h>
@@ -9,7 +10,9 @@
 #include <zlib.h>
 
 #include <filesystem>
+#include <cmath>
 #include <fstream>
+#include <utility>
 
 #include "golden.h"
 #include "refine_folders.h"
@@ -107,6 +110,90 @@ TEST_F(RefineFolders, FreeingTheNetworksAsDoneKeepsTheViews) {
       EXPECT_NE(std::string(e.what()).find("freed"), std::string::npos) << e.what();
     }
   }
+}
+
+// Replays the reference run's Gaussian draws in diffusers' order: the VAE sample, the img2img noise, one
+// per step (inputs noise.0..3 of tests/data/nn/refine_trace).
+class TraceNoise : public NoiseSource {
+ public:
+  explicit TraceNoise(TensorMap inputs) : inputs_(std::move(inputs)) {}
+  torch::Tensor randn(at::IntArrayRef shape, torch::ScalarType dtype) override {
+    const std::string key = "noise." + std::to_string(draws++);
+    if (!inputs_.count(key)) {  // more draws than the reference made: more steps than it ran
+      ADD_FAILURE() << "draw " << draws << " of shape " << shape << ": the reference drew only 4";
+      return torch::zeros(shape, dtype);
+    }
+    const torch::Tensor& n = inputs_.at(key);
+    EXPECT_EQ(n.sizes(), shape) << key;
+    return n.to(dtype);
+  }
+  int draws = 0;
+
+ private:
+  TensorMap inputs_;
+};
+
+// The sum and the sum of squares of each tensor of a weights file, in key order (make_trace.py's fingerprint).
+void expect_fingerprint(const fs::path& file, const TensorMap& reference, const std::string& prefix) {
+  const TensorMap weights = load_safetensors(file);
+  const torch::Tensor sums = reference.at(prefix + ".sum"), squares = reference.at(prefix + ".sumsq");
+  ASSERT_EQ(int64_t(weights.size()), sums.size(0)) << file;
+  int64_t i = 0;
+  for (const auto& [key, value] : weights) {
+    const double sum = value.to(torch::kDouble).sum().item<double>();
+    const double square = value.to(torch::kDouble).pow(2).sum().item<double>();
+    EXPECT_NEAR(sum, sums[i].item<double>(), 1e-9 * (1 + std::abs(sum))) << file << " " << key;
+    EXPECT_NEAR(square, squares[i].item<double>(), 1e-9 * (1 + square)) << file << " " << key;
+    ++i;
+  }
+}
+
+// The official refinement call (Unique3D's refine_rgb -> refine_lr_with_sd: diffusers 0.27.2
+// StableDiffusionControlNetImg2ImgPipeline with the tile ControlNet and the IP-Adapter), run by
+// tests/data/nn/refine_trace/make_trace.py on these very folders with its noise injected: 10 steps at
+// strength 0.2 (the last 2 run), guidance 5, a 48 px grid of four 24 px views refined at 64 px. Every
+// recorded stage must match: the conditioning, the start, the latents after each step and the images.
+TEST_F(RefineFolders, ReproducesTheOfficialRefinementTrace) {
+  const TensorMap in = golden_tensors("refine_trace", "inputs");
+  const TensorMap ref = golden_tensors("refine_trace", "outputs");
+  // The seeded text encoder and ControlNet that refine_folders.h writes are the ones the trace was made with.
+  expect_fingerprint(paths.base / "text_encoder" / "model.safetensors", ref, "weights.text_encoder");
+  expect_fingerprint(paths.ckpt / "controlnet-tile" / "diffusion_pytorch_model.safetensors", ref, "weights.controlnet");
+
+  auto encoders = RefineEncoders::load(paths, Precision::kFp32);
+  auto model = RefineModel::load(paths, Precision::kFp32);
+  std::vector<torch::Tensor> views;
+  for (int64_t i = 0; i < 4; ++i) views.push_back(in.at("views")[i].contiguous());
+  RefineSettings settings;  // the official strength, guidance, scales and prompts
+  settings.size = 64;
+  settings.steps = 10;
+  TraceNoise noise(in);
+  TensorMap trace;
+  const torch::Tensor out = model->run(encoders->encode(views, in.at("front"), settings, &trace), settings, noise, &trace);
+  EXPECT_EQ(noise.draws, 4);
+
+  EXPECT_TRUE(torch::equal(trace.at("grid"), ref.at("grid")));
+  // The resized images: equal up to float rounding (both are 8-bit PIL resizes scaled to floats).
+  EXPECT_CLOSE_TO_GOLDEN(trace.at("control_image"), ref.at("control_image"), 1e-6);
+  EXPECT_CLOSE_TO_GOLDEN(trace.at("init_image"), ref.at("init_image"), 1e-6);
+  EXPECT_CLOSE_TO_GOLDEN(trace.at("timesteps"), ref.at("timesteps"), 0.0);
+  EXPECT_CLOSE_TO_GOLDEN(trace.at("prompt_embeds"), ref.at("prompt_embeds"), kForwardTolerance);
+  EXPECT_CLOSE_TO_GOLDEN(trace.at("image_embeds"), ref.at("image_embeds"), kForwardTolerance);
+  EXPECT_CLOSE_TO_GOLDEN(trace.at("init_latents"), ref.at("init_latents"), kForwardTolerance);
+  for (int i = 0; i <= 2; ++i) {
+    SCOPED_TRACE("step " + std::to_string(i));
+    const std::string latents = "latents." + std::to_string(i);
+    EXPECT_CLOSE_TO_GOLDEN(trace.at(latents), ref.at(latents), kForwardTolerance);
+    if (i < 2) {
+      const std::string prediction = "noise_pred." + std::to_string(i);
+      EXPECT_CLOSE_TO_GOLDEN(trace.at(prediction), ref.at(prediction), kForwardTolerance);
+    }
+  }
+  EXPECT_CLOSE_TO_GOLDEN(trace.at("images"), ref.at("images"), kForwardTolerance);
+  // The four views are the reference image's quarters in grid order.
+  const torch::Tensor& image = ref.at("images");
+  for (int64_t q = 0; q < 4; ++q)
+    EXPECT_CLOSE_TO_GOLDEN(out[q], image.narrow(0, (q / 2) * 32, 32).narrow(1, (q % 2) * 32, 32), kForwardTolerance);
 }
 
 TEST_F(RefineFolders, ListsTheFilesItReads) {

@@ -227,9 +227,11 @@ torch::Tensor RefineModel::run(const RefineConditioning& conditioning, const Ref
       auto halves = prediction.chunk(2);
       prediction = halves[0] + s.guidance_scale * (halves[1] - halves[0]);
     }
+    record("noise_pred." + std::to_string(i - start), prediction);
     latents = scheduler->step(prediction, i, latents, noise).prev_sample;
     progress_step("denoise", i - start + 1, run_steps);
   }
+  record("latents." + std::to_string(run_steps), latents);
 
   if (s.free_networks_as_done) {
     unet = nullptr;

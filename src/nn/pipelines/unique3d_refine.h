@@ -111,7 +111,8 @@ class RefineModel {
 
   // conditioning: RefineEncoders::encode with the same settings. Returns the four refined views, float
   // [4, size / 2, size / 2, 3] in [0, 1]. Reports progress_step("denoise", i, n) per step. `trace`, when
-  // given, receives timesteps, init_latents, latents.<i> (before step i of the run) and images.
+  // given, receives timesteps, init_latents, latents.<i> (before step i of the run; latents.<n> after the
+  // last), noise_pred.<i> (step i's guided prediction) and images.
   torch::Tensor run(const RefineConditioning& conditioning, const RefineSettings& settings, NoiseSource& noise,
                     TensorMap* trace = nullptr);
 
