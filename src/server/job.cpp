@@ -17,6 +17,12 @@ const char* job_state_name(JobState state) {
   return "unknown";
 }
 
+std::string without_folder(std::string text, const std::filesystem::path& folder) {
+  const std::string prefix = folder.string() + "/";
+  for (size_t at; (at = text.find(prefix)) != std::string::npos;) text.erase(at, prefix.size());
+  return text;
+}
+
 Job::Job(std::string id, std::filesystem::path folder, JobSpec spec)
     : id_(std::move(id)), folder_(std::move(folder)), spec_(std::move(spec)) {
   std::lock_guard lock(mutex_);

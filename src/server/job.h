@@ -25,6 +25,10 @@ enum class JobState { Queued, Running, Done, Failed, Cancelled };
 const char* job_kind_name(JobKind kind);     // "reconstruct", "generate"
 const char* job_state_name(JobState state);  // "queued", "running", "done", "failed", "cancelled"
 
+// `text` with every "<folder>/" removed: messages name a job's files as the client knows them, by
+// their names inside the job's folder.
+std::string without_folder(std::string text, const std::filesystem::path& folder);
+
 // What a job runs: one of the two facade requests, whose input and output paths lie in the job's folder.
 struct JobSpec {
   JobKind kind = JobKind::Reconstruct;

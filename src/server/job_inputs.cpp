@@ -11,6 +11,7 @@
 #include "core/image_decode.h"
 #include "core/view_set.h"
 #include "pipeline/generate.h"
+#include "server/job.h"
 #include "server/zip_archive.h"
 
 namespace u3d::server {
@@ -108,10 +109,7 @@ void write_view_set_upload(const std::vector<UploadedFile>& files, const fs::pat
   } catch (const Error& e) {
     // The view set's own message names the files by their path in the job's folder: the client knows
     // them by their names alone.
-    std::string message = e.what();
-    const std::string prefix = dir.string() + "/";
-    for (size_t at; (at = message.find(prefix)) != std::string::npos;) message.erase(at, prefix.size());
-    throw Error(message);
+    throw Error(without_folder(e.what(), dir));
   }
 }
 

@@ -90,11 +90,7 @@ class JobProgress : public ProgressListener {
 
  private:
   using Clock = std::chrono::steady_clock;
-  std::string local(std::string text) const {
-    const std::string prefix = job_.folder().string() + "/";
-    for (size_t at; (at = text.find(prefix)) != std::string::npos;) text.erase(at, prefix.size());
-    return text;
-  }
+  std::string local(std::string text) const { return without_folder(std::move(text), job_.folder()); }
 
   Job& job_;
   Clock::time_point stage_begin_ = Clock::now(), loop_begin_ = Clock::now(), last_step_time_ = Clock::now();

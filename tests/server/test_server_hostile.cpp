@@ -167,6 +167,8 @@ TEST(ServerHostile, EveryBadRequestIsAnsweredAndTheServerGoesOnServing) {
     EXPECT_EQ(status, c.expected) << body;
     const nlohmann::json j = nlohmann::json::parse(body, nullptr, false);
     EXPECT_TRUE(j.is_object() && j.contains("error") && !j["error"].get<std::string>().empty()) << body;
+    // Messages name the client's files, never the server's folders.
+    EXPECT_EQ(body.find(server.jobs_dir().string()), std::string::npos) << body;
     int info = 0;
     server.fetch("/api/info", &info);
     ASSERT_EQ(info, 200) << "the server stopped answering";
