@@ -68,7 +68,7 @@ U3D_INLINE f32x16 dot_pairs(f32x16 acc, u32x16 a, u32x16 b) {
 // subtracting 1.5 * 2^23, whose low mantissa bits then hold n) and |f| <= 1/2, 2^f by a degree-5
 // polynomial (a near-minimax fit of ours on [-1/2, 1/2]), 2^n added to its exponent bits. Below -125
 // the result is about 2^-125 rather than smaller (no subnormals; for -inf too): weights that small
-// change no softmax. NaN stays NaN. Six fewer operations than exp_nonpositive (vector_math.h), whose
+// change no softmax. NaN stays NaN. About half the operations of exp_nonpositive (vector_math.h), whose
 // cost beside the two products of 40-channel heads is not small.
 U3D_INLINE f32x16 exp2_nonpositive(f32x16 x) {
   constexpr float kRound = 12582912.0f;  // 1.5 * 2^23
