@@ -4,11 +4,15 @@
 
 #include <cmath>
 
+#include "golden.h"
+#include "nn/layers/attention_kernel.h"
 #include "nn/layers/multiview_attention.h"
 #include "nn/layers/transformer_2d.h"
 
 namespace u3d::nn {
 namespace {
+
+using u3d::nn::test::relative_error;
 
 // softmax(q·kᵀ/√d)·v per head, written out directly.
 torch::Tensor naive_attention(const torch::Tensor& q, const torch::Tensor& k, const torch::Tensor& v, int64_t heads) {
@@ -30,6 +34,43 @@ TEST(Attention, ChunkedQueriesMatchDirectComputation) {
     auto out = multi_head_attention(q, k, v, 3, scale, budget);
     EXPECT_LT((out - expected).abs().max().item<double>(), 1e-12) << "budget " << budget;
   }
+}
+
+// The fused fp32 kernel (nn/layers/attention_kernel.h) against float64 on the same values: lengths that
+// are not multiples of its tiles (32 queries, 64 keys, 8 keys a register block), one key, the head
+// sizes of the models (40, 64, 80, 160), scores up to several hundred (the online softmax rescales its
+// sums many times), a key tensor that is a strided view. multi_head_attention takes this path.
+TEST(Attention, FusedKernelMatchesFloat64) {
+  torch::NoGradGuard no_grad;
+  torch::manual_seed(6);
+  struct Case {
+    int64_t batch, queries, keys, heads, dim;
+    double magnitude;  // of q and k
+  };
+  for (const Case& c : {Case{2, 37, 11, 3, 8, 1.0}, Case{1, 100, 77, 2, 40, 1.0}, Case{2, 33, 257, 5, 64, 1.0},
+                        Case{1, 70, 130, 1, 80, 3.0}, Case{1, 31, 65, 2, 160, 1.0}, Case{1, 64, 1, 1, 40, 1.0},
+                        Case{2, 300, 1000, 2, 40, 10.0}}) {
+    SCOPED_TRACE(testing::Message() << c.batch << " x " << c.queries << " queries, " << c.keys << " keys, " << c.heads
+                                    << " heads of " << c.dim << ", magnitude " << c.magnitude);
+    const int64_t channels = c.heads * c.dim;
+    const torch::Tensor q = torch::randn({c.batch, c.queries, channels}) * c.magnitude;
+    const torch::Tensor k = (torch::randn({c.batch, c.keys, 2 * channels}) * c.magnitude).narrow(2, channels, channels);
+    const torch::Tensor v = torch::randn({c.batch, c.keys, channels});
+    ASSERT_TRUE(fused_attention_applies(q, k, v, c.heads));
+    const double scale = 1.0 / std::sqrt(double(c.dim));
+    const torch::Tensor out = fused_attention(q, k, v, c.heads, scale);
+    EXPECT_EQ(out.scalar_type(), torch::kFloat);
+    const torch::Tensor expected = naive_attention(q.to(torch::kDouble), k.to(torch::kDouble), v.to(torch::kDouble), c.heads);
+    // fp32 products and sums; the scores' own rounding grows with their magnitude (|s| * 2^-24 of phase).
+    EXPECT_LT(relative_error(out.to(torch::kDouble), expected), 1e-5);
+    EXPECT_LT((out.to(torch::kDouble) - expected).abs().max().item<double>(), 1e-6 * (1 + c.magnitude * c.magnitude * c.dim));
+    EXPECT_TRUE(torch::equal(multi_head_attention(q, k, v, c.heads, scale), out));
+  }
+  // What the kernel does not take goes the blocked way: float64, heads of 12 channels.
+  const torch::Tensor x = torch::randn({1, 5, 24});
+  EXPECT_FALSE(fused_attention_applies(x.to(torch::kDouble), x.to(torch::kDouble), x.to(torch::kDouble), 3));
+  EXPECT_FALSE(fused_attention_applies(x, x, x, 2));
+  EXPECT_TRUE(fused_attention_applies(x, x, x, 3));
 }
 
 // Inputs whose GEGLU hidden layer would exceed 2^23 values go through the feed-forward in blocks of

@@ -1,6 +1,6 @@
 // The bf16 CPU kernels behind Conv2d, GroupNorm, the attention softmax (nn/layers/onednn_conv.h,
-// nn/layers/group_norm_kernel.h, nn/layers/softmax_kernel.h) and GEGLU (nn/layers/geglu_kernel.h), against ATen in fp32
-// or float64 on the same bf16 values.
+// nn/layers/group_norm_kernel.h, nn/layers/softmax_kernel.h), the fused attention (nn/layers/attention_kernel.h)
+// and GEGLU (nn/layers/geglu_kernel.h), against ATen in fp32 or float64 on the same bf16 values.
 #include <ATen/Parallel.h>
 #include <gtest/gtest.h>
 
@@ -9,6 +9,7 @@
 
 #include "golden.h"
 #include "nn/layers/attention.h"
+#include "nn/layers/attention_kernel.h"
 #include "nn/layers/geglu_kernel.h"
 #include "nn/layers/group_norm_kernel.h"
 #include "nn/layers/layers.h"
@@ -258,6 +259,44 @@ TEST(Bf16Kernels, AttentionMatchesFp32OnTheSameValues) {
     const torch::Tensor out = multi_head_attention(q, k, v, heads, scale, budget);
     EXPECT_EQ(out.scalar_type(), torch::kBFloat16);
     EXPECT_LT(relative_error(out.to(torch::kFloat), expected), 1e-2);
+  }
+}
+
+// The fused bf16 attention against float64 on the same bf16 values: lengths that are not multiples of its
+// tiles (32 queries, 64 keys, pairs of keys), one key, the models' head sizes, large scores, a strided key view.
+TEST(Bf16Kernels, FusedAttentionMatchesFloat64) {
+  U3D_SKIP_UNLESS_BF16_KERNELS();
+  torch::NoGradGuard no_grad;
+  torch::manual_seed(18);
+  struct Case {
+    int64_t batch, queries, keys, heads, dim;
+    double magnitude;  // of q and k
+  };
+  for (const Case& c : {Case{2, 37, 11, 3, 8, 1.0}, Case{1, 100, 77, 2, 40, 1.0}, Case{2, 33, 257, 5, 64, 1.0},
+                        Case{1, 70, 130, 1, 80, 3.0}, Case{1, 31, 65, 2, 160, 1.0}, Case{1, 64, 1, 1, 40, 1.0},
+                        Case{2, 300, 1000, 2, 40, 10.0}}) {
+    SCOPED_TRACE(testing::Message() << c.batch << " x " << c.queries << " queries, " << c.keys << " keys, " << c.heads
+                                    << " heads of " << c.dim << ", magnitude " << c.magnitude);
+    const int64_t channels = c.heads * c.dim;
+    const torch::Tensor q = (torch::randn({c.batch, c.queries, channels}) * c.magnitude).to(torch::kBFloat16);
+    const torch::Tensor k =
+        (torch::randn({c.batch, c.keys, 2 * channels}) * c.magnitude).to(torch::kBFloat16).narrow(2, 0, channels);
+    const torch::Tensor v = torch::randn({c.batch, c.keys, channels}).to(torch::kBFloat16);
+    ASSERT_TRUE(fused_attention_applies(q, k, v, c.heads));
+    const double scale = 1.0 / std::sqrt(double(c.dim));
+    const torch::Tensor out = fused_attention(q, k, v, c.heads, scale);
+    EXPECT_EQ(out.scalar_type(), torch::kBFloat16);
+    const auto split = [&](const torch::Tensor& x) {
+      return x.to(torch::kDouble).reshape({c.batch, x.size(1), c.heads, c.dim}).permute({0, 2, 1, 3});
+    };
+    const torch::Tensor expected = torch::matmul((torch::matmul(split(q), split(k).transpose(-1, -2)) * scale).softmax(-1),
+                                                 split(v))
+                                       .permute({0, 2, 1, 3})
+                                       .reshape({c.batch, c.queries, channels});
+    // Scores exact to fp32, probabilities and the output rounded to bf16 once each (2^-9 relative).
+    EXPECT_LT(relative_error(out, expected), 5e-3);
+    EXPECT_LT((out.to(torch::kDouble) - expected).abs().max().item<double>(), 2e-2);
+    EXPECT_TRUE(torch::equal(multi_head_attention(q, k, v, c.heads, scale), out));
   }
 }
 

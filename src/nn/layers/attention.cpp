@@ -1,5 +1,6 @@
 #include "nn/layers/attention.h"
 
+#include "nn/layers/attention_kernel.h"
 #include "nn/layers/softmax_kernel.h"
 
 #include <ATen/Parallel.h>
@@ -52,6 +53,7 @@ torch::Tensor multi_head_attention(const torch::Tensor& q, const torch::Tensor& 
                                    int64_t heads, double scale, int64_t score_budget) {
   TORCH_CHECK(q.dim() == 3 && k.dim() == 3 && v.dim() == 3, "attention expects [B, L, C] inputs");
   TORCH_CHECK(q.size(2) % heads == 0, "attention: ", q.size(2), " channels do not split into ", heads, " heads");
+  if (fused_attention_applies(q, k, v, heads)) return fused_attention(q, k, v, heads, scale);
   const int64_t batch = q.size(0), lq = q.size(1), lk = k.size(1), dim = q.size(2) / heads;
   if (batch * heads * lq * lk <= score_budget) {
     const torch::Tensor p =

@@ -28,16 +28,16 @@
 
 namespace u3d::nn {
 
-// q [B, Lq, H*D], k and v [B, Lk, H*D] -> [B, Lq, H*D]. `scale` multiplies q before the product (same
-// math as diffusers' alpha on q·kᵀ, and it never uses baddbmm, whose beta=0 path returns NaN on CPU in
-// libtorch 1.13); in bf16 on the CPU it multiplies the scores in fp32 inside the softmax kernel
-// (nn/layers/softmax_kernel.h). The softmax computes in fp32 for fp16/bf16 inputs and returns their dtype. When all
-// B·H·Lq·Lk scores exceed `score_budget` elements, each head's queries go in blocks of at most that
-// many scores, one block per thread at a time, reading q, k, v and writing the output in place: long
-// self-attention never materialises its full score matrix nor a head-split copy of its inputs. The
-// default, 4 MiB of fp32 scores a thread, is 64 queries a block at 16,384 keys: blocks of 8 (2^17)
-// took 1.5x as long at the first level of a 1024 px image, since each block packs all keys again
-// (bench_attention; docs/networks.md).
+// q [B, Lq, H*D], k and v [B, Lk, H*D] -> [B, Lq, H*D]. fp32 and bf16 on the CPU (with avx512_bf16 for
+// bf16), at head sizes that are multiples of 8, go to the fused kernel (nn/layers/attention_kernel.h:
+// online softmax over blocks of keys, no score matrix; `score_budget` plays no part there). Otherwise
+// `scale` multiplies q before the product (same math as diffusers' alpha on q·kᵀ, and it never uses
+// baddbmm, whose beta=0 path returns NaN on CPU in libtorch 1.13); in bf16 on the CPU it multiplies the
+// scores in fp32 inside the softmax kernel (nn/layers/softmax_kernel.h). The softmax computes in fp32
+// for fp16/bf16 inputs and returns their dtype. When all B·H·Lq·Lk scores exceed `score_budget`
+// elements, each head's queries go in blocks of at most that many scores, one block per thread at a
+// time, reading q, k, v and writing the output in place. The default, 4 MiB of fp32 scores a thread,
+// is 64 queries a block at 16,384 keys (docs/networks.md).
 constexpr int64_t kDefaultAttentionScoreBudget = int64_t{1} << 20;
 torch::Tensor multi_head_attention(const torch::Tensor& q, const torch::Tensor& k, const torch::Tensor& v,
                                    int64_t heads, double scale,
