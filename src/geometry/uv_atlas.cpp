@@ -301,10 +301,8 @@ bool first_fit(const Occupancy& atlas, const RowRuns& rows, int width, int y_lim
   int first_row = 0;  // the row that failed last: tried first
   for (int y = 0; y + height <= atlas.height && y < y_limit; ++y) {
     int blocked = -1;
-    for (int i = 0; i < height && blocked < 0; ++i) {
-      const int r = (first_row + i) % height;
+    for (int i = 0, r = first_row; i < height && blocked < 0; ++i, r = r + 1 < height ? r + 1 : 0)
       if (atlas.longest[y + r] < longest[r]) blocked = r;
-    }
     if (blocked >= 0) {  // an atlas row too full for the footprint's narrowest row rules out every y that covers it
       first_row = blocked;
       if (atlas.longest[y + blocked] < narrowest) y += blocked;
@@ -312,8 +310,7 @@ bool first_fit(const Occupancy& atlas, const RowRuns& rows, int width, int y_lim
     }
     for (int x = 0; x + width <= atlas.width;) {
       int skip = 0;
-      for (int i = 0; i < height && !skip; ++i) {
-        const int r = (first_row + i) % height;
+      for (int i = 0, r = first_row; i < height && !skip; ++i, r = r + 1 < height ? r + 1 : 0) {
         for (const auto& [start, length] : rows[r]) {
           const int v = atlas.run[size_t(y + r) * atlas.width + x + start];
           if (v < length) {
