@@ -453,9 +453,10 @@ UvAtlas axis_chart_atlas(const Mesh& mesh, const UvAtlasOptions& options) {
   while (!pending.empty()) {
     Chart c = std::move(pending.back());
     pending.pop_back();
-    // A chart that overlaps itself is cut at its median depth along its axis; a large chart that fills
-    // less than half of its bounding rectangle (an outstretched limb, a T) is cut across its longer side at
-    // its median, so that it packs.
+    // A chart that overlaps itself is cut at its median depth along its axis. A chart with more than
+    // sprawl_share of the surface that fills less than 0.6 of its bounding rectangle (an outstretched
+    // limb, a T), or one longer than half the atlas's side at the scale that would fill the atlas (a
+    // pole), is cut across its longer side at its median, so that it packs.
     std::vector<float> key(c.faces.size());
     const bool overlaps = !c.flat && self_overlaps(c, mesh, full_scale * c.stretch);
     const float share = c.area * c.stretch * c.stretch / surface_area;
@@ -465,7 +466,8 @@ UvAtlas axis_chart_atlas(const Mesh& mesh, const UvAtlasOptions& options) {
         const Vec3i& t = mesh.faces[c.faces[i]];
         key[i] = (mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]]).dot(dir);
       }
-    } else if (share > options.sprawl_share && c.area < 0.5f * c.size.prod() && c.faces.size() > 1) {
+    } else if (c.faces.size() > 1 && ((share > options.sprawl_share && c.area < 0.6f * c.size.prod()) ||
+                                      c.size.maxCoeff() * c.stretch * full_scale > 0.5f * float(options.texture_size))) {
       const int side = c.size.x() >= c.size.y() ? 0 : 1;
       for (size_t i = 0; i < c.faces.size(); ++i) {
         const Vec3i& t = mesh.faces[c.faces[i]];

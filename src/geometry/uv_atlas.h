@@ -11,8 +11,9 @@
 // counter-clockwise winding in UV and no face flips), and turned in that plane to its smallest bounding
 // rectangle. A chart whose projection overlaps itself (a surface that folds over while still facing the
 // axis) is cut at its median depth along the axis until no texel centre is covered twice; a chart with
-// more than `sprawl_share` of the surface that fills less than half of its rectangle (a T, an
-// outstretched limb) is cut across its longer side at its median. Each chart is scaled by
+// more than `sprawl_share` of the surface that fills less than 0.6 of its rectangle (a T, an
+// outstretched limb), or one longer than half the atlas's side (a pole), is cut across its longer side
+// at its median. Each chart is scaled by
 // sqrt(surface area / projected area), so every chart has the same texels per unit of surface.
 // The charts are packed, largest first, into a bitmap of the atlas (at most 1024 cells a side: 2 x 2
 // texels a cell at 2048): each takes the lowest, then leftmost, place in one of four quarter turns where
@@ -37,7 +38,7 @@ struct UvAtlasOptions {
   int gutter_texels = 4;      // empty texels around each chart
   float min_axis_cos = 0.3f;  // smoothing never gives a face an axis it faces less than this
   int min_chart_faces = 50;   // smaller islands join a neighbouring chart (if min_axis_cos allows)
-  float sprawl_share = 0.02f;  // charts with more of the surface than this are cut while they fill under half their box
+  float sprawl_share = 0.005f;  // charts with more of the surface than this are cut while they fill under 0.6 of their box
 };
 
 struct UvAtlas {

@@ -203,7 +203,7 @@ TEST(UvAtlas, SprawlingChartsAreCutSoTheAtlasFills) {
   expect_valid_atlas(t, atlas, options);
   EXPECT_GT(atlas.texel_efficiency, 0.62f);
   UvAtlasOptions uncut = options;
-  uncut.sprawl_share = 1.f;  // no chart has more than all of the surface: none is cut
+  uncut.sprawl_share = 1.f;  // no chart has more than all of the surface: none is cut for filling little of its box
   const UvAtlas whole = axis_chart_atlas(t, uncut);
   EXPECT_LT(whole.chart_count, atlas.chart_count);
   EXPECT_LT(whole.texel_efficiency, atlas.texel_efficiency);
