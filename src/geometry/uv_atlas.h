@@ -38,7 +38,7 @@ struct UvAtlasOptions {
   int gutter_texels = 4;      // empty texels around each chart
   float min_axis_cos = 0.3f;  // smoothing never gives a face an axis it faces less than this
   int min_chart_faces = 50;   // smaller islands join a neighbouring chart (if min_axis_cos allows)
-  float sprawl_share = 0.005f;  // charts with more of the surface than this are cut while they fill under 0.6 of their box
+  float sprawl_share = 0.0025f;  // charts with more of the surface than this are cut while they fill under 0.6 of their box
 };
 
 struct UvAtlas {
