@@ -1,5 +1,6 @@
 #include "geometry/uv_atlas.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -30,16 +31,24 @@ const std::array<Axis, 6> kAxes = {{
 struct Chart {
   int axis = 0;
   std::vector<int> faces;
-  bool rotated = false;         // turned a quarter (counter-clockwise) so it is at least as wide as tall
-  Vec2f min{0, 0}, size{0, 0};  // bounding box of the (turned) projection, world units
+  Vec2f turn{1, 0};             // (cos, sin) of the in-plane turn that gives the smallest bounding rectangle
+  Vec2f min{0, 0}, size{0, 0};  // that rectangle, world units
   float area = 0.f;             // projected area, world units squared
-  Vec2f origin{0, 0};           // packed position of the bounding box's corner, texels
+  float stretch = 1.f;          // sqrt(surface area / projected area): the chart's share of the packing scale
+  bool flat = false;            // known not to overlap itself (a piece of a chart that does not)
+  int quarter_turns = 0;        // packed turned this many quarters counter-clockwise
+  int x = 0, y = 0;             // packed position of its footprint's corner, packing cells
 };
 
+Vec2f project_axis(const Vec3f& p, int axis) { return Vec2f(p.dot(kAxes[axis].right), p.dot(kAxes[axis].up)); }
+
 Vec2f project(const Vec3f& p, const Chart& c) {
-  const Axis& a = kAxes[c.axis];
-  const Vec2f q(p.dot(a.right), p.dot(a.up));
-  return c.rotated ? Vec2f(-q.y(), q.x()) : q;
+  const Vec2f q = project_axis(p, c.axis);
+  return Vec2f(c.turn.x() * q.x() - c.turn.y() * q.y(), c.turn.y() * q.x() + c.turn.x() * q.y());
+}
+
+float cross(const Vec2f& o, const Vec2f& a, const Vec2f& b) {
+  return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
 }
 
 // Face-to-face adjacency across manifold interior edges: three neighbours per face, -1 on borders.
@@ -75,28 +84,57 @@ std::vector<std::vector<int>> connected_pieces(const std::vector<int>& faces,
   return pieces;
 }
 
-// Bounding box and projected area of a chart (after choosing its turn).
+// Projected and surface area of a chart, and the in-plane turn whose bounding rectangle is the smallest:
+// one of the convex hull's edges lies on the smallest rectangle's side (rotating calipers, tried edge by edge).
 void measure(Chart& c, const Mesh& mesh) {
-  c.rotated = false;
-  for (int pass = 0; pass < 2; ++pass) {
-    Vec2f lo(INFINITY, INFINITY), hi(-INFINITY, -INFINITY);
-    c.area = 0.f;
-    for (int f : c.faces) {
-      const Vec3i& t = mesh.faces[f];
-      const Vec2f a = project(mesh.positions[t[0]], c), b = project(mesh.positions[t[1]], c),
-                  d = project(mesh.positions[t[2]], c);
-      lo = lo.cwiseMin(a).cwiseMin(b).cwiseMin(d);
-      hi = hi.cwiseMax(a).cwiseMax(b).cwiseMax(d);
-      const Vec2f u = b - a, v = d - a;
-      c.area += 0.5f * std::abs(u.x() * v.y() - u.y() * v.x());
-    }
-    c.min = lo;
-    c.size = hi - lo;
-    if (pass == 0 && c.size.y() > c.size.x())
-      c.rotated = true;
-    else
-      break;
+  std::vector<Vec2f> corners;
+  corners.reserve(c.faces.size() * 3);
+  c.area = 0.f;
+  float surface = 0.f;
+  for (int f : c.faces) {
+    const Vec3i& t = mesh.faces[f];
+    const Vec2f a = project_axis(mesh.positions[t[0]], c.axis), b = project_axis(mesh.positions[t[1]], c.axis),
+                d = project_axis(mesh.positions[t[2]], c.axis);
+    c.area += 0.5f * std::abs(cross(a, b, d));
+    surface += 0.5f * (mesh.positions[t[1]] - mesh.positions[t[0]]).cross(mesh.positions[t[2]] - mesh.positions[t[0]]).norm();
+    corners.insert(corners.end(), {a, b, d});
   }
+  c.stretch = c.area > 0.f ? std::sqrt(surface / c.area) : 1.f;
+  std::sort(corners.begin(), corners.end(),
+            [](const Vec2f& a, const Vec2f& b) { return a.x() != b.x() ? a.x() < b.x() : a.y() < b.y(); });
+  std::vector<Vec2f> hull(2 * corners.size());  // Andrew's monotone chain, counter-clockwise
+  size_t k = 0;
+  for (size_t i = 0; i < corners.size(); ++i) {
+    while (k >= 2 && cross(hull[k - 2], hull[k - 1], corners[i]) <= 0.f) --k;
+    hull[k++] = corners[i];
+  }
+  for (size_t i = corners.size() - 1, lower = k + 1; i-- > 0;) {
+    while (k >= lower && cross(hull[k - 2], hull[k - 1], corners[i]) <= 0.f) --k;
+    hull[k++] = corners[i];
+  }
+  hull.resize(k > 1 ? k - 1 : k);
+  float best = INFINITY;
+  c.turn = Vec2f(1, 0);
+  for (size_t i = 0; i < hull.size(); ++i) {
+    const Vec2f e = hull[(i + 1) % hull.size()] - hull[i];
+    if (!(e.norm() > 0.f)) continue;
+    const Vec2f turn = Vec2f(e.x(), -e.y()) / e.norm();  // turns e onto +x
+    Vec2f lo(INFINITY, INFINITY), hi(-INFINITY, -INFINITY);
+    for (const Vec2f& q : hull) {
+      const Vec2f r(turn.x() * q.x() - turn.y() * q.y(), turn.y() * q.x() + turn.x() * q.y());
+      lo = lo.cwiseMin(r), hi = hi.cwiseMax(r);
+    }
+    const float box = (hi - lo).prod();
+    if (box < best) best = box, c.turn = turn;
+  }
+  Vec2f lo(INFINITY, INFINITY), hi(-INFINITY, -INFINITY);
+  for (int f : c.faces)
+    for (int v : {mesh.faces[f][0], mesh.faces[f][1], mesh.faces[f][2]}) {
+      const Vec2f q = project(mesh.positions[v], c);
+      lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
+    }
+  c.min = lo;
+  c.size = hi - lo;
 }
 
 // True when two faces of the chart cover one texel centre at `scale` texels per unit (texel centres
@@ -134,19 +172,188 @@ bool self_overlaps(const Chart& c, const Mesh& mesh, float scale) {
   return false;
 }
 
-// Shelf packing at `scale`: sets each chart's origin; false when the charts do not fit.
-bool pack(std::vector<Chart>& charts, const std::vector<int>& order, float scale, int size, int gutter) {
-  float x = 0.f, y = 0.f, shelf = 0.f;
+// The chart's cells per side at `scale` (cells per world unit): cell (x, y) spans [x, x + 1] x [y, y + 1]
+// of its projection.
+Eigen::Vector2i chart_cells(const Chart& c, float scale) {
+  const float s = scale * c.stretch;
+  return Eigen::Vector2i(int(std::floor(c.size.x() * s)) + 1, int(std::floor(c.size.y() * s)) + 1);
+}
+
+// A chart's footprint at some scale on the packing grid. The chart claims the cells its triangles touch
+// (conservatively: every cell whose square a triangle may meet), each grown by the gutter: the chart's
+// cell (x, y) claims the footprint's [x, x + gutter] x [y, y + gutter] and lies at its (x + gutter / 2,
+// y + gutter / 2). So the cells two charts touch are `gutter` empty cells apart, and those at the
+// atlas's border gutter / 2 or more from it.
+struct Footprint {
+  int width = 0, height = 0;
+  std::vector<uint8_t> cells;  // row-major, row 0 at the bottom (v up)
+};
+
+Footprint footprint(const Chart& c, const Mesh& mesh, float scale, int gutter) {
+  const float s = scale * c.stretch;
+  const Eigen::Vector2i n = chart_cells(c, scale);
+  Footprint touched{n.x(), n.y(), std::vector<uint8_t>(size_t(n.x()) * n.y(), 0)};
+  for (int f : c.faces) {
+    std::array<Vec2f, 3> q;
+    for (int k = 0; k < 3; ++k) q[k] = (project(mesh.positions[mesh.faces[f][k]], c) - c.min) * s;
+    const float sign = cross(q[0], q[1], q[2]) >= 0.f ? 1.f : -1.f;
+    const int y0 = std::clamp(int(std::floor(std::min({q[0].y(), q[1].y(), q[2].y()}))), 0, n.y() - 1),
+              y1 = std::clamp(int(std::floor(std::max({q[0].y(), q[1].y(), q[2].y()}))), 0, n.y() - 1);
+    const float x_lo = std::min({q[0].x(), q[1].x(), q[2].x()}), x_hi = std::max({q[0].x(), q[1].x(), q[2].x()});
+    for (int y = y0; y <= y1; ++y) {
+      // Cells whose square meets every edge's inner half-plane (a superset of the cells the triangle
+      // meets): per edge, a linear bound on the cell centre x + 0.5.
+      float lo = std::floor(x_lo), hi = std::floor(x_hi);
+      for (int k = 0; k < 3; ++k) {
+        const Vec2f& a = q[k];
+        const Vec2f e = q[(k + 1) % 3] - a;
+        const float slope = -sign * e.y();  // inside(x) = slope * (x + 0.5) + offset >= 0
+        const float offset = sign * (e.x() * (y + 0.5f - a.y()) + e.y() * a.x()) + 0.5f * (std::abs(e.x()) + std::abs(e.y()));
+        if (slope > 0.f) lo = std::max(lo, std::floor(-offset / slope - 0.5f));
+        else if (slope < 0.f) hi = std::min(hi, std::ceil(-offset / slope - 0.5f));
+        else if (offset < 0.f) hi = lo - 1.f;
+      }
+      const int first = std::max(0, int(lo)), last = std::min(n.x() - 1, int(hi));
+      if (first <= last) std::fill_n(touched.cells.begin() + long(size_t(y) * n.x() + first), last - first + 1, uint8_t(1));
+    }
+  }
+  // Grown by the gutter, along rows and then along columns.
+  const int w = n.x() + gutter, h = n.y() + gutter;
+  std::vector<uint8_t> along(size_t(w) * n.y(), 0);
+  for (int y = 0; y < n.y(); ++y)
+    for (int x = 0; x < n.x(); ++x)
+      if (touched.cells[size_t(y) * n.x() + x])
+        std::fill_n(along.begin() + long(size_t(y) * w + x), gutter + 1, uint8_t(1));
+  Footprint out{w, h, std::vector<uint8_t>(size_t(w) * h, 0)};
+  for (int y = 0; y < n.y(); ++y)
+    for (int x = 0; x < w; ++x)
+      if (along[size_t(y) * w + x])
+        for (int d = 0; d <= gutter; ++d) out.cells[size_t(y + d) * w + x] = 1;
+  return out;
+}
+
+// A grid `width` cells wide and `height` high with its claimed cells kept as runs: per cell, the number
+// of free cells from it rightward (positive) or minus the number of claimed ones (negative), so a
+// search skips whole runs; and per row, its longest free run and where it starts.
+struct Occupancy {
+  int width, height;
+  std::vector<int> run, longest, longest_at;
+  Occupancy(int w, int h) : width(w), height(h), run(size_t(w) * h), longest(h, w), longest_at(h, 0) {
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) run[size_t(y) * w + x] = w - x;
+  }
+  void claim_row(int y, int x0, int length) {
+    int* row = run.data() + size_t(y) * width;
+    const int end = x0 + length, after = end < width && row[end] < 0 ? -row[end] : 0;
+    for (int x = x0; x < end; ++x) row[x] = x - end - after;
+    for (int x = x0 - 1; x >= 0; --x) {  // the runs to the left again, until they stay as they were
+      const int now = row[x] > 0 ? (row[x + 1] > 0 ? row[x + 1] + 1 : 1) : (row[x + 1] < 0 ? row[x + 1] - 1 : -1);
+      if (now == row[x]) break;
+      row[x] = now;
+    }
+    if (x0 < longest_at[y] + longest[y] && longest_at[y] < end) {
+      longest[y] = 0;
+      for (int x = 0; x < width; x += std::abs(row[x]))
+        if (row[x] > longest[y]) longest[y] = row[x], longest_at[y] = x;
+    }
+  }
+};
+
+// Each row of a footprint turned `quarter_turns` quarters counter-clockwise as runs (first cell,
+// length). A quarter turn takes cell (x, y) of a w x h footprint to (h - 1 - y, x): its rows are the
+// footprint's columns, read from the top down.
+using RowRuns = std::vector<std::vector<std::pair<int, int>>>;
+RowRuns turned_runs(const Footprint& fp, int quarter_turns) {
+  const bool columns = quarter_turns % 2 == 1;
+  const int lines = columns ? fp.width : fp.height, length = columns ? fp.height : fp.width;
+  const bool reverse_lines = quarter_turns >= 2, reverse_along = quarter_turns == 1 || quarter_turns == 2;
+  RowRuns rows(lines);
+  for (int line = 0; line < lines; ++line) {
+    const int source = reverse_lines ? lines - 1 - line : line;
+    auto cell = [&](int i) {
+      return columns ? fp.cells[size_t(i) * fp.width + source] : fp.cells[size_t(source) * fp.width + i];
+    };
+    std::vector<std::pair<int, int>>& out = rows[line];
+    for (int i = 0; i < length;) {
+      if (!cell(i)) {
+        ++i;
+        continue;
+      }
+      int end = i;
+      while (end < length && cell(end)) ++end;
+      out.emplace_back(reverse_along ? length - end : i, end - i);
+      i = end;
+    }
+    if (reverse_along) std::reverse(out.begin(), out.end());
+  }
+  return rows;
+}
+
+// The lowest, then leftmost, position where the footprint's runs all fall on free cells, with y below
+// `y_limit`; false when there is none. A row whose longest free run is shorter than the footprint's
+// row there rules out its y; a run that does not fit moves x past the claimed cells it met.
+bool first_fit(const Occupancy& atlas, const RowRuns& rows, int width, int y_limit, int& found_x, int& found_y) {
+  const int height = int(rows.size());
+  std::vector<int> longest(height, 0);
+  for (int r = 0; r < height; ++r)
+    for (const auto& run : rows[r]) longest[r] = std::max(longest[r], run.second);
+  const int narrowest = *std::min_element(longest.begin(), longest.end());
+  int first_row = 0;  // the row that failed last: tried first
+  for (int y = 0; y + height <= atlas.height && y < y_limit; ++y) {
+    int blocked = -1;
+    for (int i = 0, r = first_row; i < height && blocked < 0; ++i, r = r + 1 < height ? r + 1 : 0)
+      if (atlas.longest[y + r] < longest[r]) blocked = r;
+    if (blocked >= 0) {  // an atlas row too full for the footprint's narrowest row rules out every y that covers it
+      first_row = blocked;
+      if (atlas.longest[y + blocked] < narrowest) y += blocked;
+      continue;
+    }
+    for (int x = 0; x + width <= atlas.width;) {
+      int skip = 0;
+      for (int i = 0, r = first_row; i < height && !skip; ++i, r = r + 1 < height ? r + 1 : 0) {
+        for (const auto& [start, length] : rows[r]) {
+          const int v = atlas.run[size_t(y + r) * atlas.width + x + start];
+          if (v < length) {
+            skip = v > 0 ? v + 1 : -v;
+            first_row = r;
+            break;
+          }
+        }
+      }
+      if (!skip) {
+        found_x = x, found_y = y;
+        return true;
+      }
+      x += skip;
+    }
+  }
+  return false;
+}
+
+// Bitmap packing at `scale` into a square grid `size` cells a side: each chart (largest first) takes the
+// lowest, then leftmost, place where its footprint meets no claimed cell, in the quarter turn that gives
+// the lowest place; so charts fill the holes and bays of those placed before them. Sets each chart's
+// turn and position; false when a chart does not fit.
+bool pack(std::vector<Chart>& charts, const std::vector<int>& order, const Mesh& mesh, float scale, int size,
+          int gutter) {
+  Occupancy atlas(size, size);
   for (int i : order) {
     Chart& c = charts[i];
-    const float w = std::ceil(c.size.x() * scale) + 1.f + float(gutter),
-                h = std::ceil(c.size.y() * scale) + 1.f + float(gutter);
-    if (w > float(size)) return false;
-    if (x + w > float(size)) y += shelf, x = 0.f, shelf = 0.f;
-    if (y + h > float(size)) return false;
-    c.origin = Vec2f(x, y);
-    x += w;
-    shelf = std::max(shelf, h);
+    const Footprint fp = footprint(c, mesh, scale, gutter);
+    int best_y = size, best_x = 0, best_turn = -1;
+    RowRuns best_rows;
+    for (int turn = 0; turn < 4; ++turn) {
+      const int w = turn % 2 ? fp.height : fp.width, h = turn % 2 ? fp.width : fp.height;
+      if (w > size || h > size) continue;
+      RowRuns rows = turned_runs(fp, turn);
+      int x, y;
+      if (first_fit(atlas, rows, w, best_y, x, y) && (y < best_y || (y == best_y && x < best_x)))
+        best_y = y, best_x = x, best_turn = turn, best_rows = std::move(rows);
+    }
+    if (best_turn < 0) return false;
+    c.quarter_turns = best_turn, c.x = best_x, c.y = best_y;
+    for (int r = 0; r < int(best_rows.size()); ++r)
+      for (const auto& [start, length] : best_rows[r]) atlas.claim_row(best_y + r, best_x + start, length);
   }
   return true;
 }
@@ -237,31 +444,46 @@ UvAtlas axis_chart_atlas(const Mesh& mesh, const UvAtlasOptions& options) {
       pending.push_back(std::move(c));
     }
   }
-  float total_area = 0.f;
-  for (const Chart& c : pending) total_area += c.area;
-  require(total_area > 0.f, "UV atlas: the mesh has zero area");
-  // Overlaps are looked for at the scale a packing that fills 60 % of the atlas would have.
-  const float check_scale = std::sqrt(0.6f * float(options.texture_size) * float(options.texture_size) / total_area);
+  float surface_area = 0.f;
+  for (const Chart& c : pending) surface_area += c.area * c.stretch * c.stretch;
+  require(surface_area > 0.f, "UV atlas: the mesh has zero area");
+  // No packing is denser than one that fills the atlas: overlaps are looked for at that scale.
+  const float full_scale = float(options.texture_size) / std::sqrt(surface_area);
   std::vector<Chart> charts;
   while (!pending.empty()) {
     Chart c = std::move(pending.back());
     pending.pop_back();
-    if (!self_overlaps(c, mesh, check_scale)) {
+    // A chart that overlaps itself is cut at its median depth along its axis. A chart with more than
+    // sprawl_share of the surface that fills less than 0.6 of its bounding rectangle (an outstretched
+    // limb, a T), or one longer than half the atlas's side at the scale that would fill the atlas (a
+    // pole), is cut across its longer side at its median, so that it packs.
+    std::vector<float> key(c.faces.size());
+    const bool overlaps = !c.flat && self_overlaps(c, mesh, full_scale * c.stretch);
+    const float share = c.area * c.stretch * c.stretch / surface_area;
+    if (overlaps) {
+      const Vec3f& dir = kAxes[c.axis].dir;
+      for (size_t i = 0; i < c.faces.size(); ++i) {
+        const Vec3i& t = mesh.faces[c.faces[i]];
+        key[i] = (mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]]).dot(dir);
+      }
+    } else if (c.faces.size() > 1 && ((share > options.sprawl_share && c.area < 0.6f * c.size.prod()) ||
+                                      c.size.maxCoeff() * c.stretch * full_scale > 0.5f * float(options.texture_size))) {
+      const int side = c.size.x() >= c.size.y() ? 0 : 1;
+      for (size_t i = 0; i < c.faces.size(); ++i) {
+        const Vec3i& t = mesh.faces[c.faces[i]];
+        key[i] = (project(mesh.positions[t[0]], c) + project(mesh.positions[t[1]], c) +
+                  project(mesh.positions[t[2]], c))[side];
+      }
+    } else {
       charts.push_back(std::move(c));
       continue;
     }
-    const Vec3f& dir = kAxes[c.axis].dir;
-    std::vector<float> depth(c.faces.size());
-    for (size_t i = 0; i < c.faces.size(); ++i) {
-      const Vec3i& t = mesh.faces[c.faces[i]];
-      depth[i] = (mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]]).dot(dir);
-    }
-    std::vector<float> sorted = depth;
+    std::vector<float> sorted = key;
     std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
     const float median = sorted[sorted.size() / 2];
     std::array<std::vector<int>, 2> halves;
-    for (size_t i = 0; i < c.faces.size(); ++i) halves[depth[i] < median].push_back(c.faces[i]);
-    if (halves[0].empty() || halves[1].empty()) {  // equal depths: split by face order instead
+    for (size_t i = 0; i < c.faces.size(); ++i) halves[key[i] < median].push_back(c.faces[i]);
+    if (halves[0].empty() || halves[1].empty()) {  // equal keys: split by face order instead
       halves[0].assign(c.faces.begin(), c.faces.begin() + long(c.faces.size() / 2));
       halves[1].assign(c.faces.begin() + long(c.faces.size() / 2), c.faces.end());
     }
@@ -269,43 +491,63 @@ UvAtlas axis_chart_atlas(const Mesh& mesh, const UvAtlasOptions& options) {
       for (std::vector<int>& piece : connected_pieces(half, neighbours, slot)) {
         Chart part;
         part.axis = c.axis;
+        part.flat = !overlaps;
         part.faces = std::move(piece);
         measure(part, mesh);
         pending.push_back(std::move(part));
       }
   }
 
-  // Packing: the largest scale at which every chart fits.
+  // Packing, largest charts first, on a grid of at most 1024 cells a side (2 x 2 texels a cell at 2048;
+  // gutters rounded up to whole cells), at the largest scale (to 0.5 %) at which every chart fits.
   std::vector<int> order(charts.size());
   std::iota(order.begin(), order.end(), 0);
   std::sort(order.begin(), order.end(), [&](int a, int b) {
-    return charts[a].size.y() != charts[b].size.y() ? charts[a].size.y() > charts[b].size.y() : a < b;
+    const float area_a = charts[a].area * charts[a].stretch * charts[a].stretch,
+                area_b = charts[b].area * charts[b].stretch * charts[b].stretch;
+    return area_a != area_b ? area_a > area_b : a < b;
   });
-  const int size = options.texture_size, gutter = options.gutter_texels;
-  float largest = 0.f;
-  for (const Chart& c : charts) largest = std::max({largest, c.size.x(), c.size.y()});
-  require(pack(charts, order, 0.f, size, gutter),
-          "UV atlas: a " + std::to_string(size) + " texture has no room for the gutters of " +
+  const int cell = std::max(1, options.texture_size / 1024);
+  const int size = options.texture_size / cell, gutter = (options.gutter_texels + cell - 1) / cell;
+  require(pack(charts, order, mesh, 0.f, size, gutter),
+          "UV atlas: a " + std::to_string(options.texture_size) + " texture has no room for the gutters of " +
               std::to_string(charts.size()) + " charts (use a larger texture or fewer faces)");
-  float lo = 0.f, hi = largest > 0.f ? float(size) / largest : 1.f;
-  for (int i = 0; i < 40; ++i) {
-    const float mid = 0.5f * (lo + hi);
-    (pack(charts, order, mid, size, gutter) ? lo : hi) = mid;
+  struct Placement {
+    int quarter_turns, x, y;
+  };
+  std::vector<Placement> placed;
+  auto keep = [&] {
+    placed.clear();
+    for (const Chart& c : charts) placed.push_back({c.quarter_turns, c.x, c.y});
+  };
+  // From 0.92 of the scale that would fill the atlas down in steps of 3 % until the charts fit (they do at
+  // scale 0), then bisection. Greedy packing is not monotonic in the scale: the steps find a larger scale
+  // that fits than bisecting from the start would.
+  float lo = 0.f, hi = full_scale / float(cell);
+  for (float scale = 0.92f * hi; lo == 0.f; scale *= 0.97f)
+    if (pack(charts, order, mesh, scale, size, gutter)) lo = scale, keep();
+    else hi = scale;
+  while (hi - lo > 0.005f * hi) {
+    const float scale = 0.5f * (lo + hi);
+    if (pack(charts, order, mesh, scale, size, gutter)) lo = scale, keep();
+    else hi = scale;
   }
-  pack(charts, order, lo, size, gutter);
+  for (size_t i = 0; i < charts.size(); ++i)
+    charts[i].quarter_turns = placed[i].quarter_turns, charts[i].x = placed[i].x, charts[i].y = placed[i].y;
 
   // Vertices split per chart, UVs from the packed projection.
   UvAtlas atlas;
   atlas.chart_count = int(charts.size());
-  atlas.texels_per_unit = lo;
+  atlas.texels_per_unit = lo * float(cell);
   atlas.face_chart.assign(nf, -1);
   atlas.mesh.faces.resize(nf);
   std::vector<std::vector<std::pair<int, int>>> copies(mesh.positions.size());  // (chart, atlas vertex)
-  const float half_gutter = 0.5f * float(gutter);
-  float covered_area = 0.f;
+  double covered_area = 0.0;
   for (size_t ci = 0; ci < charts.size(); ++ci) {
     const Chart& c = charts[ci];
-    covered_area += c.area;
+    covered_area += double(c.area) * c.stretch * c.stretch;
+    const Eigen::Vector2i cells = chart_cells(c, lo);
+    const float w = float(cells.x() + gutter), h = float(cells.y() + gutter);
     for (int f : c.faces) {
       atlas.face_chart[f] = int(ci);
       for (int k = 0; k < 3; ++k) {
@@ -319,14 +561,18 @@ UvAtlas axis_chart_atlas(const Mesh& mesh, const UvAtlasOptions& options) {
           atlas.mesh.positions.push_back(mesh.positions[v]);
           if (mesh.has_colors()) atlas.mesh.colors.push_back(mesh.colors[v]);
           atlas.source_vertex.push_back(v);
-          const Vec2f texel = c.origin + Vec2f(half_gutter, half_gutter) + (project(mesh.positions[v], c) - c.min) * lo;
-          atlas.mesh.uvs.push_back(texel / float(size));
+          const Vec2f p = (project(mesh.positions[v], c) - c.min) * (lo * c.stretch) + Vec2f::Constant(float(gutter / 2));
+          const Vec2f turned = c.quarter_turns == 0   ? p
+                               : c.quarter_turns == 1 ? Vec2f(h - p.y(), p.x())
+                               : c.quarter_turns == 2 ? Vec2f(w - p.x(), h - p.y())
+                                                      : Vec2f(p.y(), w - p.x());
+          atlas.mesh.uvs.push_back((turned + Vec2f(float(c.x), float(c.y))) / float(size));
         }
         atlas.mesh.faces[f][k] = id;
       }
     }
   }
-  atlas.texel_efficiency = covered_area * lo * lo / (float(size) * float(size));
+  atlas.texel_efficiency = float(covered_area * lo * lo / (double(size) * size));
   return atlas;
 }
 

@@ -122,7 +122,6 @@ TextureBakeReport bake_texture(Mesh& mesh, const ViewSet& views, const ColoringO
   const UvAtlas atlas = axis_chart_atlas(mesh, options.atlas);
   report.uv_seconds = seconds_since(start);
   report.charts = atlas.chart_count;
-  report.texel_efficiency = atlas.texel_efficiency;
 
   start = std::chrono::steady_clock::now();
   // The vertex colouring, from the views at the visibility raster's resolution (it only fills what
@@ -214,6 +213,7 @@ TextureBakeReport bake_texture(Mesh& mesh, const ViewSet& views, const ColoringO
     set[covered[i]] = 1;
   }
   report.texels_covered = count;
+  report.texel_efficiency = float(double(count) / double(texels.pixel_count()));
   report.texels_confident = confident;
   Eigen::Vector3d total(0, 0, 0);
   for (int32_t t : covered) total += Eigen::Map<const Vec3f>(texture.data.data() + size_t(t) * 3).cast<double>();

@@ -31,8 +31,8 @@ struct TextureBakeOptions {
 struct TextureBakeReport {
   ColoringReport vertices;  // the vertex colouring under the threshold
   int charts = 0;
-  float texel_efficiency = 0.f;  // share of the atlas the charts cover
-  size_t texels_covered = 0;     // texels a chart triangle covers
+  float texel_efficiency = 0.f;  // texels used: texels_covered over all texels (gutters and padding not counted)
+  size_t texels_covered = 0;     // texels whose centre a chart triangle covers: the texels baking fills
   size_t texels_confident = 0;   // of those, texels at or above the threshold
   double uv_seconds = 0.0;       // the atlas
   double bake_seconds = 0.0;     // vertex colouring, texels, dilation

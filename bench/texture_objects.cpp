@@ -1,0 +1,79 @@
+// The texture atlas on every shared object, in one process: the `full` row of bench_objects (views
+// rendered as `unique3d render --res R --fill 0.9` writes them, read back from the PNG files,
+// `reconstruct` with its defaults: 40k faces, a 2048 texture baked from the views, `eval --given-frame
+// --gt-render-fill 0.9 --views`), printing per object the atlas's charts, its texels used (the share of
+// the texture whose centre a chart triangle covers: the texels baking fills), the UV and baking
+// seconds and the 24-view PSNR and SSIM. Not a Google Benchmark. Usage: bench_texture_objects --help.
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+
+#include "core/image.h"
+#include "core/view_set.h"
+#include "eval/evaluate.h"
+#include "io/mesh_io.h"
+#include "isomer/reconstruct.h"
+#include "render/render_view.h"
+
+namespace fs = std::filesystem;
+using namespace u3d;
+
+int main(int argc, char** argv) {
+  CLI::App app{"Reconstruct every shared object with a baked texture; print texels used and PSNR per object"};
+  std::string objects_dir = (fs::path(UNIQUE3D_SOURCE_DIR) / ".." / "shared" / "data" / "objects").string();
+  std::string out_dir = "bench_texture_objects_out";
+  std::vector<std::string> only;
+  int resolution = 512;
+  const float fill = 0.9f;
+  app.add_option("--objects", objects_dir, "Folder of object folders (each with one mesh file)")->capture_default_str();
+  app.add_option("--out", out_dir, "Folder for the rendered views")->capture_default_str();
+  app.add_option("--only", only, "Object names to run (default: all)")->delimiter(',');
+  app.add_option("--res", resolution, "View resolution")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  if (!fs::is_directory(objects_dir)) {
+    std::printf("bench_texture_objects: no objects folder at %s: nothing to do (skipped)\n", objects_dir.c_str());
+    return 0;
+  }
+  std::vector<fs::path> objects;
+  for (const auto& e : fs::directory_iterator(objects_dir))
+    if (e.is_directory() && (only.empty() || std::find(only.begin(), only.end(), e.path().filename()) != only.end()))
+      objects.push_back(e.path());
+  std::sort(objects.begin(), objects.end());
+
+  std::printf("| object | faces | charts | texels used | UV (s) | baking (s) | PSNR | SSIM |\n|---|---|---|---|---|---|---|---|\n");
+  double psnr_sum = 0;
+  for (const fs::path& dir : objects) {
+    fs::path mesh_path;
+    for (const auto& e : fs::directory_iterator(dir))
+      if (e.path().extension() == ".obj") mesh_path = e.path();
+    if (mesh_path.empty()) continue;
+    const Mesh gt = read_mesh(mesh_path);
+    Mesh placed = gt;
+    normalize_to_unit_box(placed, fill);
+    const fs::path views_dir = fs::path(out_dir) / dir.filename() / "views";
+    fs::create_directories(views_dir);
+    RenderSettings settings;
+    settings.ssaa = 2;  // `unique3d render`'s default
+    for (View v : kAllViews) {
+      const RenderedView r = render_view(placed, view_camera(v, resolution), settings);
+      save_image(r.rgb, views_dir / view_file_name(v, false));
+      save_image(r.normal, views_dir / view_file_name(v, true));
+    }
+    const ViewSet views = load_view_set(views_dir);
+    const ReconstructResult result = reconstruct(views);
+    EvalOptions eval;
+    eval.normalize = false;
+    eval.gt_render_fill = fill;
+    const EvalReport report = evaluate_meshes(result.mesh, gt, eval, &views);
+    const TextureBakeReport& t = result.texture;
+    const int size = ReconstructOptions{}.texture.atlas.texture_size;
+    std::printf("| %s | %zu | %d | %.1f %% | %.2f | %.2f | %.2f | %.4f |\n", dir.filename().c_str(),
+                result.mesh.face_count(), t.charts, 100.0 * double(t.texels_covered) / (double(size) * size),
+                t.uv_seconds, t.bake_seconds, report.appearance->psnr, report.appearance->ssim);
+    std::fflush(stdout);
+    psnr_sum += report.appearance->psnr;
+  }
+  if (!objects.empty()) std::printf("\nmean PSNR %.3f dB over %zu objects\n", psnr_sum / double(objects.size()), objects.size());
+  return 0;
+}
