@@ -1,5 +1,6 @@
 // The official front-photo preparation: Pillow's thumbnail size, the white background with the alpha kept,
-// simple_preprocess's crop and square, and the rule that photos at most 512 px wide are super-resolved.
+// simple_preprocess's crop and square, the rule that photos at most 512 px wide are super-resolved, and
+// matte_photo's cut-out with the solid mask.
 #include <gtest/gtest.h>
 
 #include <cmath>
