@@ -207,7 +207,7 @@ TEST_F(GenerateCommand, StageCommandsWriteTheLibrarysViews) {
 // The stage-by-stage recipe (README): `matte` and then `multiview` and `refine` on the cut-out give the
 // views `generate` keeps, byte for byte, for a photo without transparency (its background removed by the
 // tiny U^2-Net, its mask made solid) wider than 512 px (the preparation upscales none of it). --prepared
-// takes generate's front.png as it is, for the same views again.
+// takes generate's front.png as it is, for the same views again; without it, front.png is prepared again.
 TEST_F(GenerateCommand, MatteThenMultiviewAndRefineGiveGeneratesViews) {
   const fs::path d = *dir / "recipe";
   fs::create_directories(d);
@@ -254,6 +254,11 @@ TEST_F(GenerateCommand, MatteThenMultiviewAndRefineGiveGeneratesViews) {
               d / "prepared.log");
   ASSERT_EQ(r.status, 0) << r.output;
   expect_same_views(d / "mv_prepared", d / "kept" / "multiview", false);
+  r = run_cli("refine " + (d / "mv").string() + " --front " + (d / "kept" / "front.png").string() + " --prepared -o " +
+                  (d / "refined_prepared").string() + models() + " --size 64",
+              d / "refine_prepared.log");
+  ASSERT_EQ(r.status, 0) << r.output;
+  expect_same_views(d / "refined_prepared", d / "kept" / "refined", false);
   // Without --prepared, the prepared image is prepared again (cropped once more, its colours put on white
   // again): other views, which is why the flag is there.
   r = run_cli("multiview " + (d / "kept" / "front.png").string() + " -o " + (d / "mv_twice").string() + models() +
