@@ -64,6 +64,7 @@ const CommandRegistration registration{
                      "Not needed with --from-intermediates, whose front.png is the photo");
       sub.add_option("-o,--output", r.output, "Output mesh (.glb, .obj or .ply)")->required();
       add_network_options(sub, a->network);
+      add_raw_matte_flag(sub, r.raw_matte);
       sub.add_flag("--no-refine", a->no_refine,
                    "Skip the ControlNet-tile refinement of the four views (resize them to 512 px instead; the "
                    "stable-diffusion-v1-5, controlnet-tile and IP-Adapter folders are then not needed)");

@@ -10,28 +10,39 @@ namespace {
 struct ImageArgs {
   ImageRequest request;
   NetworkArgs network;
+  bool raw_matte = false;
 };
 
-CommandSetup image_command(NetworkStageSummary (*run)(const ImageRequest&, ProgressListener*),
-                           const char* output_help) {
-  return [run, output_help](CLI::App& sub) {
-    auto a = std::make_shared<ImageArgs>();
-    sub.add_option("image", a->request.image, "Input image (PNG or JPEG)")->required();
-    sub.add_option("-o,--output", a->request.output, output_help)->required();
-    add_network_options(sub, a->network, /*seeded=*/false);
-    return [a, run] {
-      ImageRequest request = a->request;
-      request.network = a->network.resolved();
-      print_stage_summary(run(request, nullptr));
-    };
-  };
+std::shared_ptr<ImageArgs> add_image_options(CLI::App& sub, const char* output_help) {
+  auto a = std::make_shared<ImageArgs>();
+  sub.add_option("image", a->request.image, "Input image (PNG or JPEG)")->required();
+  sub.add_option("-o,--output", a->request.output, output_help)->required();
+  add_network_options(sub, a->network, /*seeded=*/false);
+  return a;
 }
 
-const CommandRegistration upscale{"upscale", "Super-resolve an image x4 with Real-ESRGAN (alpha is upscaled too)",
-                                  image_command(upscale_image, "Output image (.png keeps the alpha)")};
+const CommandRegistration upscale{
+    "upscale", "Super-resolve an image x4 with Real-ESRGAN (alpha is upscaled too)", [](CLI::App& sub) {
+      auto a = add_image_options(sub, "Output image (.png keeps the alpha)");
+      return [a] {
+        ImageRequest request = a->request;
+        request.network = a->network.resolved();
+        print_stage_summary(upscale_image(request));
+      };
+    }};
+
 const CommandRegistration matte{
-    "matte", "Remove an image's background (U^2-Net or ISNet, as rembg does)",
-    image_command(remove_background, "Output image with the background transparent (.png)")};
+    "matte",
+    "Remove an image's background as `generate` does (U^2-Net or ISNet with rembg's cut-out, the mask made solid)",
+    [](CLI::App& sub) {
+      auto a = add_image_options(sub, "Output image with the background transparent (.png)");
+      add_raw_matte_flag(sub, a->raw_matte);
+      return [a] {
+        ImageRequest request = a->request;
+        request.network = a->network.resolved();
+        print_stage_summary(remove_background(request, a->raw_matte));
+      };
+    }};
 
 struct RefineArgs {
   RefineRequest request;
@@ -46,8 +57,12 @@ const CommandRegistration refine{
       sub.add_option("views_dir", r.views_dir, "Folder with {front,right,back,left}_rgb.png (as `multiview` writes)")
           ->required();
       sub.add_option("-o,--output", r.output_dir, "Output folder: the refined {view}_rgb.png (512 px by default)")->required();
-      sub.add_option("--front", r.front, "The object photo on a transparent background, which the IP-Adapter sees")
+      sub.add_option("--front", r.front,
+                     "The photo `multiview` drew from, prepared as `generate` prepares it for the IP-Adapter")
           ->required();
+      sub.add_flag("--prepared", r.prepared_front,
+                   "--front is already prepared (front.png of `generate --keep-intermediates`): use it as it is");
+      add_raw_matte_flag(sub, r.raw_matte);
       add_network_options(sub, a->network);
       sub.add_option("--steps", r.options.steps, "Steps of the schedule, of which the last steps x strength run")
           ->capture_default_str()

@@ -13,10 +13,16 @@ struct MultiViewArgs {
 };
 
 const CommandRegistration registration{
-    "multiview", "Generate four views (front, right, back, left; 256 px by default) of an object photo", [](CLI::App& sub) {
+    "multiview", "Generate four views (front, right, back, left; 256 px by default) of an object photo, as `generate` draws them", [](CLI::App& sub) {
       auto args = std::make_shared<MultiViewArgs>();
       MultiViewRequest& r = args->request;
-      sub.add_option("image", r.image, "The object on a transparent background (RGBA PNG)")->required();
+      sub.add_option("image", r.image,
+                     "The photo (PNG or JPEG), prepared as `generate` prepares it: background removed when it has "
+                     "none, cropped to the object, padded to a square on white")
+          ->required();
+      sub.add_flag("--prepared", r.prepared,
+                   "The image is already prepared (front.png of `generate --keep-intermediates`): use it as it is");
+      add_raw_matte_flag(sub, r.raw_matte);
       sub.add_option("-o,--output", r.output_dir, "Output folder: {front,right,back,left}_rgb.png")->required();
       add_network_options(sub, args->network);
       sub.add_option("--steps", r.options.steps, "Denoising steps")->capture_default_str()->check(CLI::Range(1, 1000));

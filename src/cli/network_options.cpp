@@ -12,6 +12,12 @@ NetworkOptions NetworkArgs::resolved() const {
   return o;
 }
 
+void add_raw_matte_flag(CLI::App& sub, bool& raw_matte) {
+  sub.add_flag("--raw-matte", raw_matte,
+               "Keep the background-removal mask as the network draws it (default: opaque inside the subject's "
+               "outline, holes kept; docs/generate.md)");
+}
+
 void add_network_options(CLI::App& sub, NetworkArgs& args, bool seeded, bool models_required) {
   sub.add_option("--models", args.options.models,
                  "Folder with the network weights: the official release's ckpt/ folder (docs/models.md)")

@@ -63,26 +63,6 @@ Image to_rgba(const Image& image) {
   return out;
 }
 
-// The photo, checked: an Error for what no stage can use, RGBA for the rest (grey replicated; no alpha
-// is alpha 1, i.e. no background removed yet).
-Image load_photo(const fs::path& path) {
-  const Image photo = load_image(path);
-  const std::string name = "photo " + path.string();
-  require(std::min(photo.width, photo.height) >= kMinPhotoSide,
-          name + " is " + std::to_string(photo.width) + "x" + std::to_string(photo.height) +
-              ": too small to reconstruct from (at least " + std::to_string(kMinPhotoSide) + " px per side)");
-  require(std::max(photo.width, photo.height) <= kMaxPhotoSide,
-          name + " is " + std::to_string(photo.width) + "x" + std::to_string(photo.height) + ": larger than " +
-              std::to_string(kMaxPhotoSide) + " px per side; scale it down first");
-  return to_rgba(photo);
-}
-
-// The object's mask covers nothing / everything.
-bool fully_transparent(const Image& rgba) {
-  for (size_t i = 0; i < rgba.pixel_count(); ++i)
-    if (rgba.data[4 * i + 3] > 0.f) return false;
-  return true;
-}
 bool opaque(const Image& rgba) {
   for (size_t i = 0; i < rgba.pixel_count(); ++i)
     if (rgba.data[4 * i + 3] < 1.f) return false;
@@ -147,7 +127,7 @@ struct Run {
     switch (stage) {
       case kPrepare: {
         NetworkStageSummary st;
-        front = run_prepare_stage(*photo, request.network, st, cache);
+        front = run_prepare_stage(*photo, request.network, request.raw_matte, st, cache);
         photo.reset();
         keep({{"front.png", &front}});
         report(stage, st.total_seconds(), false);
@@ -271,8 +251,6 @@ GenerateSummary generate(const GenerateRequest& request, ProgressListener* liste
   std::optional<Image> photo;
   if (start == kPrepare) {
     photo = load_photo(request.image);
-    require(!fully_transparent(*photo),
-            "photo " + request.image.string() + " is fully transparent: nothing to reconstruct");
   }
   // Their files are there and match the networks (a truncated or wrong checkpoint fails here, not after
   // minutes of denoising); the photo needs the upscaler when it is small, the views always do.

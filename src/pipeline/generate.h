@@ -28,17 +28,13 @@
 
 namespace u3d {
 
-// Limits on the photo: smaller has too little of the object to draw four views from; larger is
-// certainly not an object photo the networks can use (they see it at most at 2048 px).
-inline constexpr int kMinPhotoSide = 64;
-inline constexpr int kMaxPhotoSide = 8192;
-
 struct GenerateRequest {
   std::filesystem::path image;   // the photo (PNG/JPEG; RGBA with the object on transparency, or not); not
                                  // read, and may be empty, when resuming from_intermediates
   std::filesystem::path output;  // .glb, .obj or .ply; empty: none written (the summary holds the mesh)
   bool previews = false;         // as ReconstructRequest: also <stem>_views.png and <stem>_turntable.png
   NetworkOptions network;
+  bool raw_matte = false;                    // as run_prepare_stage (pipeline/image_stages.h)
   bool refine = true;                        // false: the views are resized instead of refined
   std::filesystem::path keep_intermediates;  // empty: none written
   std::filesystem::path from_intermediates;  // empty: start from the photo

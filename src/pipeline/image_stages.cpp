@@ -1,5 +1,6 @@
 #include "pipeline/image_stages.h"
 
+#include <algorithm>
 #include <cctype>
 #include <optional>
 
@@ -31,8 +32,23 @@ void check_image_output(const std::filesystem::path& output) {
 
 }  // namespace
 
-Image run_prepare_stage(const Image& photo, const NetworkOptions& network, NetworkStageSummary& summary,
-                        NetworkCache* cache) {
+Image load_photo(const std::filesystem::path& path) {
+  const Image photo = load_image_rgba(path);
+  const std::string name = "photo " + path.string();
+  const std::string size = std::to_string(photo.width) + "x" + std::to_string(photo.height);
+  require(std::min(photo.width, photo.height) >= kMinPhotoSide,
+          name + " is " + size + ": too small to reconstruct from (at least " + std::to_string(kMinPhotoSide) +
+              " px per side)");
+  require(std::max(photo.width, photo.height) <= kMaxPhotoSide,
+          name + " is " + size + ": larger than " + std::to_string(kMaxPhotoSide) + " px per side; scale it down first");
+  bool visible = false;
+  for (size_t i = 0; i < photo.pixel_count() && !visible; ++i) visible = photo.data[4 * i + 3] > 0.f;
+  require(visible, name + " is fully transparent: nothing to reconstruct");
+  return photo;
+}
+
+Image run_prepare_stage(const Image& photo, const NetworkOptions& network, bool raw_matte,
+                        NetworkStageSummary& summary, NetworkCache* cache) {
   const ModelFolder folder(network.models);
   summary.precision = resolve_precision(network);
   StageTimer timer("preparing the photo");
@@ -45,7 +61,7 @@ Image run_prepare_stage(const Image& photo, const NetworkOptions& network, Netwo
         if (cache) return cache->matting(folder, summary.precision);
         return nn::MattingModel::load(folder.matting(), summary.precision);
       }};
-  const Image front = tensor_to_image(nn::prepare_input_photo(image_to_uint8(photo), models, false));
+  const Image front = tensor_to_image(nn::prepare_input_photo(image_to_uint8(photo), models, false, raw_matte));
   summary.timings.push_back({"prepare", timer.finish()});
   summary.peak_memory_mib = peak_memory_mib();
   return front;
@@ -119,7 +135,7 @@ NetworkStageSummary upscale_image(const ImageRequest& request, ProgressListener*
   return summary;
 }
 
-NetworkStageSummary remove_background(const ImageRequest& request, ProgressListener* listener) {
+NetworkStageSummary remove_background(const ImageRequest& request, bool raw_matte, ProgressListener* listener) {
   std::optional<ProgressScope> scope;
   if (listener) scope.emplace(listener);
   check_image_output(request.output);
@@ -131,9 +147,7 @@ NetworkStageSummary remove_background(const ImageRequest& request, ProgressListe
   auto model = nn::MattingModel::load(folder.matting(), summary.precision);
   summary.timings.push_back({"load matting model", load_timer.finish()});
   StageTimer timer("removing the background");
-  const torch::Tensor pixels = image_to_uint8(image);
-  const torch::Tensor mask = model->matte(pixels.slice(2, 0, 3).contiguous());
-  const Image out = tensor_to_image(nn::cutout(pixels, mask, model->style));
+  const Image out = tensor_to_image(nn::matte_photo(image_to_uint8(image), *model, raw_matte));
   model.reset();
   summary.timings.push_back({"matte", timer.finish()});
   summary.peak_memory_mib = peak_memory_mib();
@@ -148,8 +162,10 @@ NetworkStageSummary refine_views(const RefineRequest& request, ProgressListener*
   require(request.options.steps >= 1, "refinement steps must be at least 1");
   std::array<Image, 4> views;
   for (View v : kAllViews) views[size_t(v)] = load_image(request.views_dir / view_file_name(v, false));
-  const Image front = load_image(request.front);
   NetworkStageSummary summary;
+  const Image front = request.prepared_front
+                          ? load_image(request.front)
+                          : run_prepare_stage(load_photo(request.front), request.network, request.raw_matte, summary);
   const std::array<Image, 4> refined = run_refine_stage(views, front, request.network, request.options, summary);
   write_folder_atomically(request.output_dir, [&](const std::filesystem::path& folder) {
     for (View v : kAllViews) save_image(refined[size_t(v)], folder / view_file_name(v, false));

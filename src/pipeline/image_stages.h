@@ -19,9 +19,19 @@
 
 namespace u3d {
 
-// photo: RGB(A) in [0, 1]. Returns the square RGBA front image the multi-view stage starts from.
-Image run_prepare_stage(const Image& photo, const NetworkOptions& network, NetworkStageSummary& summary,
-                        NetworkCache* cache = nullptr);
+// Limits on the photo: smaller has too little of the object to draw four views from; larger is
+// certainly not an object photo the networks can use (they see it at most at 2048 px).
+inline constexpr int kMinPhotoSide = 64;
+inline constexpr int kMaxPhotoSide = 8192;
+
+// The photo, checked: an Error naming the file for what no stage can use (too small, too large, fully
+// transparent), RGBA for the rest (grey replicated; no alpha is alpha 1, i.e. no background removed yet).
+Image load_photo(const std::filesystem::path& path);
+
+// photo: RGB(A) in [0, 1]. Returns the square RGBA front image the multi-view stage starts from. The
+// background removal's mask is made solid (nn/pipelines/input_photo.h) unless raw_matte.
+Image run_prepare_stage(const Image& photo, const NetworkOptions& network, bool raw_matte,
+                        NetworkStageSummary& summary, NetworkCache* cache = nullptr);
 
 struct RefineOptions {
   int size = 1024;        // side of the 2x2 grid the pass redraws; each view comes back at size / 2
@@ -45,19 +55,26 @@ struct ImageRequest {
   NetworkOptions network;
 };
 
-// `unique3d upscale`: the image x4. `unique3d matte`: the image with its background removed (RGBA).
+// `unique3d upscale`: the image x4.
 NetworkStageSummary upscale_image(const ImageRequest& request, ProgressListener* listener = nullptr);
-NetworkStageSummary remove_background(const ImageRequest& request, ProgressListener* listener = nullptr);
+
+// `unique3d matte`: the image with its background removed (RGBA) as the prepare stage removes it
+// (nn::matte_photo: the mask made solid unless raw_matte, rembg's cut-out).
+NetworkStageSummary remove_background(const ImageRequest& request, bool raw_matte,
+                                      ProgressListener* listener = nullptr);
 
 struct RefineRequest {
   std::filesystem::path views_dir;  // {front,right,back,left}_rgb.png, as `multiview` writes them
-  std::filesystem::path front;      // the object photo (transparent background) the IP-Adapter sees
+  std::filesystem::path front;      // the photo, prepared into the front image the IP-Adapter sees
   std::filesystem::path output_dir;
   NetworkOptions network;
   RefineOptions options;
+  bool prepared_front = false;  // `front` is the prepare stage's output (generate's front.png): used as it is
+  bool raw_matte = false;       // as run_prepare_stage
 };
 
-// `unique3d refine`: the four views refined, written only after the stage succeeded.
+// `unique3d refine`: the four views refined, with the front photo prepared as `generate` prepares it
+// (not when prepared_front), written only after the stage succeeded.
 NetworkStageSummary refine_views(const RefineRequest& request, ProgressListener* listener = nullptr);
 
 }  // namespace u3d

@@ -1,6 +1,7 @@
 #include "pipeline/multiview_stage.h"
 
 #include <optional>
+#include <string>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -8,6 +9,7 @@
 #include "core/view_set.h"
 #include "nn/pipelines/unique3d_multiview.h"
 #include "nn/preprocess/pil_resize.h"
+#include "pipeline/model_check.h"
 #include "pipeline/model_folder.h"
 #include "pipeline/tensor_image.h"
 
@@ -44,15 +46,21 @@ NetworkStageSummary generate_views(const MultiViewRequest& request, ProgressList
   if (listener) scope.emplace(listener);
   require(request.options.steps >= 1, "multi-view steps must be at least 1");
   require(request.options.size >= 8 && request.options.size % 8 == 0, "multi-view size must be a multiple of 8");
-  const Image front = load_image(request.image);
-  require(front.channels == 4, "image " + request.image.string() +
-                                   " has no alpha channel: give the object on a transparent background (RGBA PNG)");
-  bool transparent = false;
-  for (size_t i = 0; i < front.pixel_count() && !transparent; ++i) transparent = front.data[4 * i + 3] < 1.f;
-  require(transparent, "image " + request.image.string() +
-                           " is opaque everywhere: give the object on a transparent background (RGBA PNG)");
-
   NetworkStageSummary summary;
+  Image front;
+  if (request.prepared) {
+    front = load_image(request.image);
+    const std::string advice = ": a prepared image has the object on a transparent background (RGBA PNG; "
+                               "without --prepared the photo is prepared first)";
+    require(front.channels == 4, "image " + request.image.string() + " has no alpha channel" + advice);
+    bool transparent = false;
+    for (size_t i = 0; i < front.pixel_count() && !transparent; ++i) transparent = front.data[4 * i + 3] < 1.f;
+    require(transparent, "image " + request.image.string() + " is opaque everywhere" + advice);
+  } else {
+    const Image photo = load_photo(request.image);
+    require_networks(ModelFolder(request.network.models), {Network::kMultiView});  // before the preparation runs
+    front = run_prepare_stage(photo, request.network, request.raw_matte, summary);
+  }
   const std::array<Image, 4> views = run_multiview_stage(front, request.network, request.options, summary);
   StageTimer write_timer("writing views");
   write_folder_atomically(request.output_dir, [&](const std::filesystem::path& folder) {

@@ -8,6 +8,7 @@
 
 #include "core/image.h"
 #include "core/progress.h"
+#include "pipeline/image_stages.h"
 #include "pipeline/network_cache.h"
 #include "pipeline/network_stage.h"
 
@@ -26,14 +27,18 @@ std::array<Image, 4> run_multiview_stage(const Image& front, const NetworkOption
                                          NetworkCache* cache = nullptr);
 
 struct MultiViewRequest {
-  std::filesystem::path image;       // the object on a transparent background (RGBA PNG)
+  std::filesystem::path image;       // the photo, or the prepared front image when `prepared`
   std::filesystem::path output_dir;  // receives {front,right,back,left}_rgb.png
   NetworkOptions network;
   MultiViewOptions options;
+  bool prepared = false;   // the image is the prepare stage's output (generate's front.png): used as it is
+  bool raw_matte = false;  // as run_prepare_stage (pipeline/image_stages.h)
 };
 
-// Checks the request and the image before loading any weights (Error naming the file or value), runs the
-// stage and writes the four views only after it succeeded (a new folder appears whole or not at all).
+// Checks the request and the image before loading any weights (Error naming the file or value), prepares
+// the photo as `generate` does (run_prepare_stage; not when `prepared`), runs the stage and writes the
+// four views only after it succeeded (a new folder appears whole or not at all). So the views of a photo
+// are those of `generate` with the same seed and options.
 NetworkStageSummary generate_views(const MultiViewRequest& request, ProgressListener* listener = nullptr);
 
 }  // namespace u3d

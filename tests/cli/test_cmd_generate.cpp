@@ -204,5 +204,69 @@ TEST_F(GenerateCommand, StageCommandsWriteTheLibrarysViews) {
   expect_same_views(d / "normals", d / "normals_library", true);
 }
 
+// The stage-by-stage recipe (README): `matte` and then `multiview` and `refine` on the cut-out give the
+// views `generate` keeps, byte for byte, for a photo without transparency (its background removed by the
+// tiny U^2-Net, its mask made solid) wider than 512 px (the preparation upscales none of it). --prepared
+// takes generate's front.png as it is, for the same views again; without it, front.png is prepared again.
+TEST_F(GenerateCommand, MatteThenMultiviewAndRefineGiveGeneratesViews) {
+  const fs::path d = *dir / "recipe";
+  fs::create_directories(d);
+  Image photo(520, 500, 3, 0.55f);
+  for (int y = 0; y < photo.height; ++y)
+    for (int x = 0; x < photo.width; ++x)
+      if ((x - 250) * (x - 250) + (y - 260) * (y - 260) < 180 * 180) {
+        float* p = photo.pixel(x, y);
+        p[0] = 0.9f, p[1] = 0.3f + 0.001f * y, p[2] = 0.2f;
+      }
+  save_image(photo, d / "photo.png");
+  const std::string sizes = " --multiview-size 32 --refine-size 64 --normal-size 32 --steps 2";
+  CliRun r = run_cli("generate " + (d / "photo.png").string() + " -o " + (d / "mesh.glb").string() + models() + sizes +
+                         " --coarse-steps 5 --refine-steps 5 --no-silhouette-fit --faces 500 --texture-size 128"
+                         " --keep-intermediates " + (d / "kept").string(),
+                     d / "generate.log");
+  ASSERT_EQ(r.status, 0) << r.output;
+
+  r = run_cli("matte " + (d / "photo.png").string() + " -o " + (d / "object.png").string() + " --models " +
+                  (*dir / "models").string() + " --dtype fp32",
+              d / "matte.log");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const Image object = load_image(d / "object.png");
+  ASSERT_EQ(object.channels, 4);
+  float lo = 1.f, hi = 0.f;
+  for (size_t i = 0; i < object.pixel_count(); ++i)
+    lo = std::min(lo, object.data[4 * i + 3]), hi = std::max(hi, object.data[4 * i + 3]);
+  EXPECT_LT(lo, 0.1f);  // a mask with a background, so that `multiview` does not remove it again
+  EXPECT_GT(hi, 0.9f);
+
+  r = run_cli("multiview " + (d / "object.png").string() + " -o " + (d / "mv").string() + models() +
+                  " --size 32 --steps 2",
+              d / "multiview.log");
+  ASSERT_EQ(r.status, 0) << r.output;
+  expect_same_views(d / "mv", d / "kept" / "multiview", false);
+  r = run_cli("refine " + (d / "mv").string() + " --front " + (d / "object.png").string() + " -o " +
+                  (d / "refined").string() + models() + " --size 64",
+              d / "refine.log");
+  ASSERT_EQ(r.status, 0) << r.output;
+  expect_same_views(d / "refined", d / "kept" / "refined", false);
+
+  r = run_cli("multiview " + (d / "kept" / "front.png").string() + " --prepared -o " + (d / "mv_prepared").string() +
+                  models() + " --size 32 --steps 2",
+              d / "prepared.log");
+  ASSERT_EQ(r.status, 0) << r.output;
+  expect_same_views(d / "mv_prepared", d / "kept" / "multiview", false);
+  r = run_cli("refine " + (d / "mv").string() + " --front " + (d / "kept" / "front.png").string() + " --prepared -o " +
+                  (d / "refined_prepared").string() + models() + " --size 64",
+              d / "refine_prepared.log");
+  ASSERT_EQ(r.status, 0) << r.output;
+  expect_same_views(d / "refined_prepared", d / "kept" / "refined", false);
+  // Without --prepared, the prepared image is prepared again (cropped once more, its colours put on white
+  // again): other views, which is why the flag is there.
+  r = run_cli("multiview " + (d / "kept" / "front.png").string() + " -o " + (d / "mv_twice").string() + models() +
+                  " --size 32 --steps 2",
+              d / "twice.log");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_FALSE(file_bytes(d / "mv_twice" / "front_rgb.png") == file_bytes(d / "kept" / "multiview" / "front_rgb.png"));
+}
+
 }  // namespace
 }  // namespace u3d

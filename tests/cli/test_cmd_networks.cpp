@@ -9,6 +9,7 @@
 
 #include "core/image.h"
 #include "core/synthetic_views.h"
+#include "nn/pipelines/input_photo.h"
 #include "nn/pipelines/matting.h"
 #include "nn/pipelines/upscale.h"
 #include "pipeline/tensor_image.h"
@@ -75,23 +76,34 @@ TEST_F(NetworkCommands, UpscaleAndMatteWriteTheNetworksOutputs) {
   ASSERT_EQ(r.status, 0) << r.output;
   const torch::Tensor cut = image_to_uint8(load_image(*dir / "cut.png"));
   const auto matting = nn::MattingModel::load(*dir / "models" / "u2net.onnx", nn::Precision::kFp32);
-  const torch::Tensor mask = matting->matte(pixels);
   ASSERT_EQ(cut.sizes(), torch::IntArrayRef({20, 24, 4}));
+  EXPECT_TRUE(torch::equal(cut, nn::matte_photo(pixels, *matting, /*raw_matte=*/false)));
+  // --raw-matte: the network's mask as it is, rembg's cut-out (colours times the mask).
+  r = run_cli("matte " + (*dir / "small.png").string() + " -o " + (*dir / "raw.png").string() + models() +
+                  " --dtype fp32 --raw-matte",
+              *dir / "m2.log");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const torch::Tensor raw = image_to_uint8(load_image(*dir / "raw.png"));
+  const torch::Tensor mask = matting->matte(pixels);
   EXPECT_GT(mask.max().item<int>() - mask.min().item<int>(), 10);  // the comparison below can tell masks apart
-  EXPECT_TRUE(torch::equal(cut.select(2, 3), mask));
-  EXPECT_TRUE(torch::equal(cut, nn::cutout(pixels, mask, matting->style)));  // rembg: colours times the mask
+  EXPECT_TRUE(torch::equal(raw.select(2, 3), mask));
+  EXPECT_TRUE(torch::equal(raw, nn::cutout(pixels, mask, nn::MattingStyle::kRembg)));
 }
 
 TEST_F(NetworkCommands, BadInputsAreNamedAndWriteNothing) {
   const fs::path out = *dir / "never";
-  // A photo without transparency.
+  // A "prepared" image without transparency, and a photo too small to prepare.
   Image opaque(64, 64, 3, 0.5f);
   save_image(opaque, *dir / "opaque.png");
-  CliResult r =
-      run_cli("multiview " + (*dir / "opaque.png").string() + " -o " + out.string() + models(), *dir / "b1.log");
+  CliResult r = run_cli("multiview " + (*dir / "opaque.png").string() + " --prepared -o " + out.string() + models(),
+                        *dir / "b1.log");
   EXPECT_EQ(r.status, 1 << 8) << r.output;
   EXPECT_NE(r.output.find("opaque.png"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("alpha"), std::string::npos) << r.output;
+  save_image(Image(40, 64, 3, 0.5f), *dir / "narrow.png");
+  r = run_cli("multiview " + (*dir / "narrow.png").string() + " -o " + out.string() + models(), *dir / "b1b.log");
+  EXPECT_EQ(r.status, 1 << 8) << r.output;
+  EXPECT_NE(r.output.find("narrow.png is 40x64: too small"), std::string::npos) << r.output;
   // A model folder without the multi-view checkpoint.
   fs::create_directories(*dir / "empty_models");
   r = run_cli("multiview " + (*dir / "photo.png").string() + " -o " + out.string() + " --models " +

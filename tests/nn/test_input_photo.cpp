@@ -1,8 +1,12 @@
 // The official front-photo preparation: Pillow's thumbnail size, the white background with the alpha kept,
-// simple_preprocess's crop and square, and the rule that photos at most 512 px wide are super-resolved.
+// simple_preprocess's crop and square, the rule that photos at most 512 px wide are super-resolved, and
+// matte_photo's cut-out with the solid mask.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "core/progress.h"
+#include "core/solid_matte.h"
 #include "golden.h"
 #include "nn/pipelines/input_photo.h"
 
@@ -84,8 +88,8 @@ TEST(InputPhoto, OnlyPhotosAtMost512PxWideAreSuperResolved) {
   };
   // The disc (radius 8) is 17 px across, less the official crop's last row and column: 16. A photo 512 px
   // wide is upscaled x4 first (68 - 1), one 520 px wide is not.
-  const torch::Tensor small = prepare_input_photo(photo(512, 24), models, false);
-  const torch::Tensor large = prepare_input_photo(photo(520, 24), models, false);
+  const torch::Tensor small = prepare_input_photo(photo(512, 24), models, false, false);
+  const torch::Tensor large = prepare_input_photo(photo(520, 24), models, false, false);
   EXPECT_EQ(small.size(0), 67);
   EXPECT_EQ(large.size(0), 16);
   // Each network is loaded only when the photo needs it: one upscale, no background removal.
@@ -93,6 +97,24 @@ TEST(InputPhoto, OnlyPhotosAtMost512PxWideAreSuperResolved) {
   EXPECT_EQ(matting_loads, 0);
   // The colours are kept under the alpha.
   EXPECT_EQ(large[8][8][0].item<int>(), 120);
+}
+
+// matte_photo is rembg's remove with the mask made solid: the cut-out of the photo with solid_matte of the
+// network's mask, or with the mask itself for the raw matte.
+TEST(InputPhoto, MattePhotoCutsOutWithTheSolidMask) {
+  auto model = MattingModel::load(golden_dir("u2net_tiny") / "u2net_div8" / "u2net_div8_op17.onnx", Precision::kFp32);
+  const torch::Tensor rgb = golden_tensors("isnet_tiny", "inputs").at("image_rgb_u8");
+  const torch::Tensor mask = model->matte(rgb).contiguous();
+  EXPECT_TRUE(torch::equal(matte_photo(rgb, *model, /*raw_matte=*/true), cutout(rgb, mask, MattingStyle::kRembg)));
+
+  Image alpha(int(mask.size(1)), int(mask.size(0)), 1);
+  for (size_t i = 0; i < alpha.data.size(); ++i) alpha.data[i] = float(mask.data_ptr<uint8_t>()[i]) / 255.f;
+  const Image solid = solid_matte(alpha);
+  torch::Tensor solid_mask = torch::empty_like(mask);
+  for (size_t i = 0; i < solid.data.size(); ++i)
+    solid_mask.data_ptr<uint8_t>()[i] = static_cast<uint8_t>(std::lround(solid.data[i] * 255.f));
+  EXPECT_FALSE(torch::equal(solid_mask, mask));  // the comparison below can tell the two apart
+  EXPECT_TRUE(torch::equal(matte_photo(rgb, *model, false), cutout(rgb, solid_mask, MattingStyle::kRembg)));
 }
 
 }  // namespace

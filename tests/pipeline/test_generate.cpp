@@ -58,7 +58,7 @@ TEST_F(Generate, WritesTheMeshAndEveryStagesIntermediatesAndResumesFromThem) {
   for (const auto& stage : s.stages) EXPECT_FALSE(stage.resumed) << stage.name;
   // front.png is the prepare stage's image of the photo.
   NetworkStageSummary prepare;
-  const Image prepared = run_prepare_stage(load_image(r.image), r.network, prepare);
+  const Image prepared = run_prepare_stage(load_image(r.image), r.network, false, prepare);
   EXPECT_EQ(load_image(*dir / "kept" / "front.png").data, prepared.data);
   for (const char* folder : {"multiview", "refined", "upscaled", "views"})
     EXPECT_TRUE(fs::exists(*dir / "kept" / folder / "left_rgb.png")) << folder;
@@ -151,7 +151,7 @@ TEST_F(Generate, Takes16BitPhotos) {
   generate(r);
   EXPECT_GT(read_mesh(*dir / "from16.glb").face_count(), 0u);
   NetworkStageSummary prepare;
-  const Image from_8_bits = run_prepare_stage(load_image(*dir / "photo.png"), r.network, prepare);
+  const Image from_8_bits = run_prepare_stage(load_image(*dir / "photo.png"), r.network, false, prepare);
   EXPECT_EQ(load_image(*dir / "kept16" / "front.png").data, from_8_bits.data);
 }
 

@@ -4,6 +4,7 @@
 
 #include "core/error.h"
 #include "core/progress.h"
+#include "core/solid_matte.h"
 #include "nn/preprocess/pil_resize.h"
 
 namespace u3d::nn {
@@ -66,7 +67,23 @@ torch::Tensor simple_preprocess(const torch::Tensor& rgba) {
   return square;
 }
 
-torch::Tensor prepare_input_photo(const torch::Tensor& image, const InputPhotoModels& models, bool remove_background) {
+torch::Tensor matte_photo(const torch::Tensor& image, MattingModel& model, bool raw_matte) {
+  require(image.dim() == 3 && (image.size(2) == 3 || image.size(2) == 4) && image.scalar_type() == torch::kUInt8,
+          "matte_photo: expected a uint8 RGB or RGBA image [H, W, 3|4]");
+  torch::Tensor mask = model.matte(image.slice(2, 0, 3).contiguous()).contiguous();
+  if (!raw_matte) {
+    Image alpha(int(mask.size(1)), int(mask.size(0)), 1);
+    const uint8_t* m = mask.data_ptr<uint8_t>();
+    for (size_t i = 0; i < alpha.data.size(); ++i) alpha.data[i] = float(m[i]) / 255.f;
+    const Image solid = solid_matte(alpha);
+    uint8_t* out = mask.data_ptr<uint8_t>();
+    for (size_t i = 0; i < solid.data.size(); ++i) out[i] = static_cast<uint8_t>(std::lround(solid.data[i] * 255.f));
+  }
+  return cutout(image, mask, MattingStyle::kRembg);
+}
+
+torch::Tensor prepare_input_photo(const torch::Tensor& image, const InputPhotoModels& models, bool remove_background,
+                                  bool raw_matte) {
   require(image.dim() == 3 && (image.size(2) == 3 || image.size(2) == 4) && image.scalar_type() == torch::kUInt8,
           "prepare_input_photo: expected a uint8 RGB or RGBA image [H, W, 3|4]");
   torch::Tensor photo = image;
@@ -79,9 +96,7 @@ torch::Tensor prepare_input_photo(const torch::Tensor& image, const InputPhotoMo
   if (remove_background || opaque) {
     const auto matting = models.matting();
     StageTimer stage("remove background");
-    // rembg's remove: the mask from the RGB channels, the cut-out of the whole image.
-    const torch::Tensor mask = matting->matte(photo.slice(2, 0, 3).contiguous());
-    photo = cutout(photo, mask, MattingStyle::kRembg);
+    photo = matte_photo(photo, *matting, raw_matte);
   }
   return simple_preprocess(colours_on_white(photo));
 }
