@@ -35,7 +35,9 @@ TEST(SolidMatte, RingKeepsItsHole) {
   const Image solid = solid_matte(ring);
   for (size_t i = 0; i < ring.data.size(); ++i) {
     EXPECT_GE(solid.data[i], ring.data[i]) << i;
-    if (ring.data[i] <= kSolidMatteClear) EXPECT_EQ(solid.data[i], ring.data[i]) << i;  // the hole, the outside
+    if (ring.data[i] <= kSolidMatteClear) {
+      EXPECT_EQ(solid.data[i], ring.data[i]) << i;  // the hole, the outside
+    }
   }
   // The ring itself is opaque.
   EXPECT_EQ(solid.at(kSize / 2 + 60, kSize / 2, 0), 1.f);
@@ -76,8 +78,12 @@ TEST(SolidMatte, SoftEdgesKeepTheNetworksAlphaWithinTheEdgeRadius) {
     for (int x = 0; x < size; ++x) {
       const double d = std::hypot(x + 0.5 - size / 2.0, y + 0.5 - size / 2.0);
       const float before = soft.at(x, y, 0), after = solid.at(x, y, 0);
-      if (before < kSolidMatteCore || d > half - 3) EXPECT_EQ(after, before) << x << ", " << y;
-      if (d < half - 8.5) EXPECT_EQ(after, 1.f) << x << ", " << y;
+      if (before < kSolidMatteCore || d > half - 3) {
+        EXPECT_EQ(after, before) << x << ", " << y;
+      }
+      if (d < half - 8.5) {
+        EXPECT_EQ(after, 1.f) << x << ", " << y;
+      }
     }
 }
 
@@ -103,10 +109,11 @@ TEST(SolidMatte, HolesStayOpenSpecksCloseAndWhatReachesTheBorderIsKept) {
       const float before = alpha.at(x, y, 0), after = solid.at(x, y, 0);
       const bool near_hole = x >= 99 && x < 121 && y >= 99 && y < 121;  // the hole and 1 px (< 2 edge radii)
       const bool inside = x >= 41 && x < 199 && y >= 41 && y < 199;     // the subject less 1 px
-      if (inside && !near_hole)
+      if (inside && !near_hole) {
         EXPECT_EQ(after, 1.f) << x << ", " << y;
-      else if (!inside || (x >= 100 && x < 120 && y >= 100 && y < 120))
+      } else if (!inside || (x >= 100 && x < 120 && y >= 100 && y < 120)) {
         EXPECT_EQ(after, before) << x << ", " << y;
+      }
     }
 }
 
