@@ -19,9 +19,9 @@
 // texels a cell at 2048): each takes the lowest, then leftmost, place in one of four quarter turns where
 // the cells it touches, grown by `gutter_texels` (rounded up to whole cells), meet no claimed cell, so
 // small charts fill the bays and holes of large ones; the scale is searched from 0.92 of the scale that
-// would fill the atlas down in 3 % steps until all charts fit, then bisected to 0.5 %. Texels two charts touch are at least `gutter_texels` apart, so bilinear lookups and
-// mipmaps of a dilated texture do not bleed between charts. docs/file_formats.md compares this with
-// xatlas-style packers.
+// would fill the atlas down in 3 % steps until all charts fit, then bisected to 0.5 %. Texels two
+// charts touch are at least `gutter_texels` apart, so bilinear lookups and mipmaps of a dilated texture
+// do not bleed between charts. docs/file_formats.md compares this with xatlas-style packers.
 //
 // Why not Open3D's UVAtlas (t::geometry::TriangleMesh::ComputeUVAtlas): Debian's Open3D 0.16 is built
 // without it (it throws "UVAtlas not available in Debian"); it is also single-threaded and rejects
