@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "core/memory.h"
 #include "core/synthetic_views.h"
+#include "io/io_test_util.h"
 #include "pipeline/tiny_model_folder.h"
 
 namespace u3d {
@@ -19,12 +20,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string file_bytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-nlohmann::json read_json(const fs::path& path) { return nlohmann::json::parse(file_bytes(path)); }
+nlohmann::json read_json(const fs::path& path) { return nlohmann::json::parse(test::read_file(path)); }
 
 // Small and quick: a sphere at 64 px, a few optimisation steps.
 BatchSpec small_spec(const fs::path& out) {
@@ -93,10 +89,10 @@ TEST_F(BatchRunner, EachObjectGetsAWholeFolderAndARerunSkipsIt) {
   }
   EXPECT_TRUE(hidden_entries(dir / "out").empty());
 
-  const std::string done_before = file_bytes(dir / "out" / "small" / "done.json");
+  const std::string done_before = test::read_file(dir / "out" / "small" / "done.json");
   const BatchReport second = run_batch(inputs, spec);
   EXPECT_EQ(second.count(ObjectOutcome::Skipped), 2u);
-  EXPECT_EQ(file_bytes(dir / "out" / "small" / "done.json"), done_before);
+  EXPECT_EQ(test::read_file(dir / "out" / "small" / "done.json"), done_before);
 }
 
 TEST_F(BatchRunner, ChangedInputsAndOptionsAreRedone) {
@@ -104,14 +100,14 @@ TEST_F(BatchRunner, ChangedInputsAndOptionsAreRedone) {
   const std::vector<BatchInput> inputs = sphere_inputs(dir / "in", {{"a", 0.5f}, {"b", 0.6f}});
   BatchSpec spec = small_spec(dir / "out");
   ASSERT_EQ(run_batch(inputs, spec).count(ObjectOutcome::Done), 2u);
-  const std::string glb_b = file_bytes(dir / "out" / "b" / "mesh.glb");
+  const std::string glb_b = test::read_file(dir / "out" / "b" / "mesh.glb");
 
   // b's views now show a larger sphere: b is redone, a skipped.
   testing::write_view_set(testing::sphere_views(0.75f, 64), dir / "in" / "b");
   const BatchReport changed = run_batch(inputs, spec);
   EXPECT_EQ(changed.objects[0].outcome, ObjectOutcome::Skipped);
   EXPECT_EQ(changed.objects[1].outcome, ObjectOutcome::Done);
-  EXPECT_NE(file_bytes(dir / "out" / "b" / "mesh.glb"), glb_b);
+  EXPECT_NE(test::read_file(dir / "out" / "b" / "mesh.glb"), glb_b);
   EXPECT_EQ(read_json(dir / "out" / "b" / "done.json")["input"]["sha256"], input_hash(inputs[1]));
 
   // Other options: both redone, and the stale folders replaced without leftovers.
@@ -198,13 +194,13 @@ TEST_F(BatchRunner, PhotosRunTheWholeMethodWithTheModelChecksRecorded) {
   EXPECT_EQ(report.objects[1].networks_loaded, room ? 0u : 5u);
   // Kept networks draw what fresh ones do: the same mesh for the same photo, and the same as a plain
   // generate, whose stages load and free their networks.
-  const std::string mesh = file_bytes(dir / "out" / "disk" / "mesh.glb");
-  EXPECT_TRUE(mesh == file_bytes(dir / "out" / "disk2" / "mesh.glb"));
+  const std::string mesh = test::read_file(dir / "out" / "disk" / "mesh.glb");
+  EXPECT_TRUE(mesh == test::read_file(dir / "out" / "disk2" / "mesh.glb"));
   GenerateRequest plain = spec.generate;
   plain.image = dir / "in" / "disk.png";
   plain.output = dir / "plain.glb";
   generate(plain);
-  EXPECT_TRUE(mesh == file_bytes(dir / "plain.glb"));
+  EXPECT_TRUE(mesh == test::read_file(dir / "plain.glb"));
   const nlohmann::json done = read_json(dir / "out" / "disk" / "done.json");
   EXPECT_EQ(done["mode"], "generate");
   EXPECT_EQ(done["input"]["sha256"], sha256_file(dir / "in" / "disk.png"));

@@ -13,6 +13,7 @@
 #include <string>
 
 #include "core/synthetic_views.h"
+#include "io/io_test_util.h"
 
 namespace u3d {
 namespace {
@@ -23,11 +24,6 @@ namespace fs = std::filesystem;
 const std::string kOptions =
     " --coarse-steps 5 --refine-steps 3 --texture-size 128 --faces 500 --visibility-resolution 128 --no-silhouette-fit";
 
-std::string file_bytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
 struct CliResult {
   int status = -1;
   std::string output;
@@ -36,7 +32,7 @@ struct CliResult {
 CliResult run_cli(const std::string& args, const fs::path& log) {
   const std::string cmd = std::string(UNIQUE3D_CLI) + " " + args + " > " + log.string() + " 2>&1";
   const int raw = std::system(cmd.c_str());
-  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, file_bytes(log)};
+  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, test::read_file(log)};
 }
 
 // View sets of the bundled example and the test object, each rendered at 64 px with a framing (--fill).
@@ -79,8 +75,8 @@ TEST_F(BatchCli, ThreeShardsInThreeProcessesGiveTheMeshesOfSingleRuns) {
   std::map<std::string, int> done_by;
   for (int i = 0; i < 3; ++i) {
     const std::string n = std::to_string(i);
-    ASSERT_EQ(file_bytes(*dir / ("shard" + n + ".status")), "0\n") << file_bytes(*dir / ("shard" + n + ".log"));
-    const nlohmann::json report = nlohmann::json::parse(file_bytes(*dir / ("shard" + n + ".json")));
+    ASSERT_EQ(test::read_file(*dir / ("shard" + n + ".status")), "0\n") << test::read_file(*dir / ("shard" + n + ".log"));
+    const nlohmann::json report = nlohmann::json::parse(test::read_file(*dir / ("shard" + n + ".json")));
     EXPECT_EQ(report["shard"], n + "/3");
     EXPECT_EQ(report["batch_objects"], 12);
     EXPECT_EQ(report["failed"], 0);
@@ -97,9 +93,9 @@ TEST_F(BatchCli, ThreeShardsInThreeProcessesGiveTheMeshesOfSingleRuns) {
     const CliResult r = run_cli("-q --threads 1 reconstruct " + (*dir / "in" / name).string() + " -o " + single.string() + kOptions,
                                 *dir / "single.log");
     ASSERT_EQ(r.status, 0) << r.output;
-    const std::string batch_mesh = file_bytes(out / name / "mesh.glb");
+    const std::string batch_mesh = test::read_file(out / name / "mesh.glb");
     ASSERT_FALSE(batch_mesh.empty()) << name;
-    EXPECT_TRUE(batch_mesh == file_bytes(single)) << name << ": the batch's mesh.glb differs from `reconstruct`'s";
+    EXPECT_TRUE(batch_mesh == test::read_file(single)) << name << ": the batch's mesh.glb differs from `reconstruct`'s";
   }
 
   // The jobs files of the three shards: each object once, all done.
@@ -110,7 +106,7 @@ TEST_F(BatchCli, ThreeShardsInThreeProcessesGiveTheMeshesOfSingleRuns) {
                                     std::to_string(i) + "/3 --jobs-file " + jobs.string() + kOptions,
                                 *dir / "jobs.log");
     ASSERT_EQ(r.status, 0) << r.output;
-    std::istringstream lines(file_bytes(jobs));
+    std::istringstream lines(test::read_file(jobs));
     for (std::string line; std::getline(lines, line);) {
       if (line.empty() || line[0] == '#') continue;
       const std::string name = line.substr(0, line.find('\t'));

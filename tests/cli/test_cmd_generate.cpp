@@ -14,6 +14,7 @@
 
 #include "core/image.h"
 #include "core/synthetic_views.h"
+#include "io/io_test_util.h"
 #include "io/mesh_io.h"
 #include "nn/runtime.h"
 #include "pipeline/generate.h"
@@ -27,11 +28,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string file_bytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
 struct CliRun {
   int status = -1;
   std::string output;  // stdout and stderr
@@ -40,7 +36,7 @@ struct CliRun {
 CliRun run_cli(const std::string& args, const fs::path& log) {
   CliRun r;
   r.status = std::system((std::string(UNIQUE3D_CLI) + " " + args + " > " + log.string() + " 2>&1").c_str());
-  r.output = file_bytes(log);
+  r.output = test::read_file(log);
   return r;
 }
 
@@ -51,7 +47,7 @@ void expect_same_views(const fs::path& cli, const fs::path& library, bool normal
       if (normal && !normals) continue;
       const std::string name = view_file_name(v, normal);
       ASSERT_TRUE(fs::exists(cli / name)) << cli / name;
-      EXPECT_TRUE(file_bytes(cli / name) == file_bytes(library / name)) << name;
+      EXPECT_TRUE(test::read_file(cli / name) == test::read_file(library / name)) << name;
     }
 }
 
@@ -131,7 +127,7 @@ TEST_F(GenerateCommand, WritesTheLibrarysMeshAndSaysEachStage) {
   request.reconstruct.faces = 500;
   request.reconstruct.texture.atlas.texture_size = 128;
   const GenerateSummary library = generate(request);
-  EXPECT_TRUE(file_bytes(d / "cli.glb") == file_bytes(d / "library.glb"));
+  EXPECT_TRUE(test::read_file(d / "cli.glb") == test::read_file(d / "library.glb"));
 
   std::ifstream in(d / "summary.json");
   const nlohmann::json summary = nlohmann::json::parse(in);
@@ -265,7 +261,7 @@ TEST_F(GenerateCommand, MatteThenMultiviewAndRefineGiveGeneratesViews) {
                   " --size 32 --steps 2",
               d / "twice.log");
   ASSERT_EQ(r.status, 0) << r.output;
-  EXPECT_FALSE(file_bytes(d / "mv_twice" / "front_rgb.png") == file_bytes(d / "kept" / "multiview" / "front_rgb.png"));
+  EXPECT_FALSE(test::read_file(d / "mv_twice" / "front_rgb.png") == test::read_file(d / "kept" / "multiview" / "front_rgb.png"));
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "core/synthetic_views.h"
+#include "io/io_test_util.h"
 #include "io/mesh_io.h"
 #include "pipeline/tiny_model_folder.h"
 
@@ -42,11 +43,6 @@ class Generate : public ::testing::Test {
   static fs::path* dir;
 };
 fs::path* Generate::dir = nullptr;
-
-std::string file_bytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
 
 TEST_F(Generate, WritesTheMeshAndEveryStagesIntermediatesAndResumesFromThem) {
   GenerateRequest r = request("mesh.glb");
@@ -95,7 +91,7 @@ TEST_F(Generate, WritesTheMeshAndEveryStagesIntermediatesAndResumesFromThem) {
     const size_t kept_stages = later.size() - removed;
     ASSERT_EQ(rs.stages.size(), generate_stage_names().size());
     for (size_t i = 0; i < rs.stages.size(); ++i) EXPECT_EQ(rs.stages[i].resumed, i < kept_stages) << rs.stages[i].name;
-    EXPECT_TRUE(file_bytes(*dir / "resumed.glb") == file_bytes(*dir / "mesh.glb")) << "resumed after " << kept_stages;
+    EXPECT_TRUE(test::read_file(*dir / "resumed.glb") == test::read_file(*dir / "mesh.glb")) << "resumed after " << kept_stages;
     fs::remove(*dir / "resumed.glb");
   }
 }
