@@ -1,6 +1,6 @@
 // The official front-photo preparation: Pillow's thumbnail size, the white background with the alpha kept,
-// simple_preprocess's crop and square, the rule that photos at most 512 px wide are super-resolved, and
-// matte_photo's cut-out with the solid mask.
+// simple_preprocess's crop and square, the rule that photos at most 512 px wide are super-resolved, an
+// opaque alpha taken as none, and matte_photo's cut-out with the solid mask.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -97,6 +97,27 @@ TEST(InputPhoto, OnlyPhotosAtMost512PxWideAreSuperResolved) {
   EXPECT_EQ(matting_loads, 0);
   // The colours are kept under the alpha.
   EXPECT_EQ(large[8][8][0].item<int>(), 120);
+}
+
+// A photo whose alpha is 255 everywhere is a photo without alpha: its background is removed, and it is
+// prepared exactly as its RGB channels alone are, although the upscaler (the tiny random Real-ESRGAN)
+// would not keep its alpha at 255.
+TEST(InputPhoto, AnOpaqueAlphaIsPreparedAsNoAlpha) {
+  set_progress_quiet(true);
+  int matting_loads = 0;
+  const std::filesystem::path upscaler = golden_dir("realesrgan_tiny") / "rrdbnet_tiny_op17.onnx";
+  const InputPhotoModels models{[&] { return UpscaleModel::load(upscaler, Precision::kFp32); },
+                                [&] {
+                                  ++matting_loads;
+                                  return MattingModel::load(
+                                      golden_dir("u2net_tiny") / "u2net_div8" / "u2net_div8_op17.onnx", Precision::kFp32);
+                                }};
+  torch::Tensor rgb = torch::full({96, 96, 3}, 140, torch::kUInt8);
+  rgb.slice(0, 30, 70).slice(1, 25, 75).select(2, 0).fill_(230);
+  const torch::Tensor rgba = torch::cat({rgb, torch::full({96, 96, 1}, 255, torch::kUInt8)}, 2);
+  EXPECT_FALSE((UpscaleModel::load(upscaler, Precision::kFp32)->upscale(rgba).select(2, 3) == 255).all().item<bool>());
+  EXPECT_TRUE(torch::equal(prepare_input_photo(rgba, models, false, false), prepare_input_photo(rgb, models, false, false)));
+  EXPECT_EQ(matting_loads, 2);
 }
 
 // matte_photo is rembg's remove with the mask made solid: the cut-out of the photo with solid_matte of the

@@ -86,13 +86,15 @@ torch::Tensor prepare_input_photo(const torch::Tensor& image, const InputPhotoMo
                                   bool raw_matte) {
   require(image.dim() == 3 && (image.size(2) == 3 || image.size(2) == 4) && image.scalar_type() == torch::kUInt8,
           "prepare_input_photo: expected a uint8 RGB or RGBA image [H, W, 3|4]");
-  torch::Tensor photo = image;
+  // Opaque is a property of the photo, decided before the upscaler, whose alpha of an opaque photo need
+  // not stay 255 everywhere: an opaque photo is upscaled as RGB, as one without alpha is.
+  const bool opaque = image.size(2) == 3 || (image.select(2, 3) == 255).all().item<bool>();
+  torch::Tensor photo = opaque ? image.slice(2, 0, 3).contiguous() : image;
   if (photo.size(1) <= kSuperResolveMaxWidth) {
     const auto upscaler = models.upscaler();
     StageTimer stage("upscale input photo");
     photo = upscaler->upscale(photo);
   }
-  const bool opaque = photo.size(2) == 3 || (photo.select(2, 3) == 255).all().item<bool>();
   if (remove_background || opaque) {
     const auto matting = models.matting();
     StageTimer stage("remove background");
