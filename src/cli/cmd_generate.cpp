@@ -66,8 +66,9 @@ const CommandRegistration registration{
       add_network_options(sub, a->network);
       add_raw_matte_flag(sub, r.raw_matte);
       sub.add_flag("--no-refine", a->no_refine,
-                   "Skip the ControlNet-tile refinement of the four views (resize them to 512 px instead; the "
-                   "stable-diffusion-v1-5, controlnet-tile and IP-Adapter folders are then not needed)");
+                   "Skip the ControlNet-tile refinement of the four views (resize them to the size it would give, "
+                   "half of --refine-size, instead; the stable-diffusion-v1-5, controlnet-tile and IP-Adapter "
+                   "folders are then not needed)");
       sub.add_option("--steps", a->steps, "Denoising steps of the multi-view and normal models (default: 30 each)")
           ->check(CLI::Range(1, 1000));
       sub.add_option("--keep-intermediates", r.keep_intermediates,

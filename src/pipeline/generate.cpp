@@ -21,9 +21,7 @@ namespace fs = std::filesystem;
 
 enum Stage { kPrepare, kMultiView, kRefine, kUpscale, kNormals, kReconstruct, kStageCount };
 
-constexpr int kRefinedSize = 512;
-constexpr int kSuperResolveMaxWidth =
-    int(nn::kSuperResolveMaxWidth);  // the views after refinement (or its replacement, a Lanczos resize)
+constexpr int kSuperResolveMaxWidth = int(nn::kSuperResolveMaxWidth);
 
 // Where a stage's outputs live inside the intermediates folder.
 fs::path stage_folder(Stage stage) {
@@ -146,8 +144,10 @@ struct Run {
           views = run_refine_stage(views, front, request.network, request.refine_options, st, cache);
           report(stage, st.total_seconds(), false);
         } else {
-          StageTimer timer("resizing the views to 512 px");
-          for (Image& view : views) view = lanczos_resize(view, kRefinedSize);
+          // The size the refinement would give them (512 px at the official grid of 1024).
+          const int size = request.refine_options.size / 2;
+          StageTimer timer("resizing the views to " + std::to_string(size) + " px");
+          for (Image& view : views) view = lanczos_resize(view, size);
           report(stage, timer.finish(), false);
         }
         keep_views(stage);

@@ -5,7 +5,7 @@
 //              padded to a square on white                                    -> front.png
 //   multiview  four 256 px views from the multi-view model                    -> multiview/
 //   refine     the views redrawn as a 1024 px 2x2 grid (ControlNet-tile), or
-//              resized to 512 px (Lanczos) without refinement                 -> refined/
+//              resized to the size it gives (Lanczos) without refinement      -> refined/
 //   upscale    the views to 2048 px (Real-ESRGAN x4)                          -> upscaled/
 //   normals    a normal map per view, masks, world space: the view set        -> views/
 //   reconstruct ISOMER on the view set                                        -> the output mesh

@@ -88,7 +88,7 @@ TEST_F(GenerateCommand, WritesTheLibrarysMeshAndSaysEachStage) {
   fs::create_directories(d);
   // Small sizes and few steps (testing::use_tiny_sizes), no refinement, a coarse mesh and texture.
   const std::string small =
-      " --steps 2 --no-refine --multiview-size 32 --normal-size 32 --coarse-steps 5 --refine-steps 5"
+      " --steps 2 --no-refine --multiview-size 32 --refine-size 64 --normal-size 32 --coarse-steps 5 --refine-steps 5"
       " --no-silhouette-fit --faces 500 --texture-size 128";
   const CliRun r = run_cli("generate " + (*dir / "photo.png").string() + " -o " + (d / "cli.glb").string() +
                                models() + small + " --keep-intermediates " + (d / "kept").string() + " --json " +
@@ -124,8 +124,6 @@ TEST_F(GenerateCommand, WritesTheLibrarysMeshAndSaysEachStage) {
   request.network = network();
   testing::use_tiny_sizes(request);
   request.refine = false;
-  request.reconstruct.faces = 500;
-  request.reconstruct.texture.atlas.texture_size = 128;
   const GenerateSummary library = generate(request);
   EXPECT_TRUE(test::read_file(d / "cli.glb") == test::read_file(d / "library.glb"));
 
@@ -215,14 +213,26 @@ TEST_F(GenerateCommand, MatteThenMultiviewAndRefineGiveGeneratesViews) {
         p[0] = 0.9f, p[1] = 0.3f + 0.001f * y, p[2] = 0.2f;
       }
   save_image(photo, d / "photo.png");
-  const std::string sizes = " --multiview-size 32 --refine-size 64 --normal-size 32 --steps 2";
-  CliRun r = run_cli("generate " + (d / "photo.png").string() + " -o " + (d / "mesh.glb").string() + models() + sizes +
-                         " --coarse-steps 5 --refine-steps 5 --no-silhouette-fit --faces 500 --texture-size 128"
-                         " --keep-intermediates " + (d / "kept").string(),
-                     d / "generate.log");
-  ASSERT_EQ(r.status, 0) << r.output;
+  // generate's views (the command's are the library's: WritesTheLibrarysMeshAndSaysEachStage), the run
+  // stopped where the upscaler would start, after the refined views are kept.
+  struct CancelAtTheUpscaler : ProgressListener {
+    bool reached = false;
+    void on_event(const ProgressEvent& e) override {
+      reached = reached || (e.kind == ProgressEvent::Kind::StageBegin && e.text == "loading the upscaler");
+    }
+    bool cancel_requested() override { return reached; }
+  };
+  GenerateRequest request;
+  request.image = d / "photo.png";
+  request.output = d / "mesh.glb";
+  request.network = network();
+  testing::use_tiny_sizes(request);
+  request.keep_intermediates = d / "kept";
+  CancelAtTheUpscaler cancel;
+  EXPECT_THROW(generate(request, &cancel), Cancelled);
+  ASSERT_TRUE(cancel.reached);
 
-  r = run_cli("matte " + (d / "photo.png").string() + " -o " + (d / "object.png").string() + " --models " +
+  CliRun r = run_cli("matte " + (d / "photo.png").string() + " -o " + (d / "object.png").string() + " --models " +
                   (*dir / "models").string() + " --dtype fp32",
               d / "matte.log");
   ASSERT_EQ(r.status, 0) << r.output;
@@ -240,7 +250,7 @@ TEST_F(GenerateCommand, MatteThenMultiviewAndRefineGiveGeneratesViews) {
   ASSERT_EQ(r.status, 0) << r.output;
   expect_same_views(d / "mv", d / "kept" / "multiview", false);
   r = run_cli("refine " + (d / "mv").string() + " --front " + (d / "object.png").string() + " -o " +
-                  (d / "refined").string() + models() + " --size 64",
+                  (d / "refined").string() + models() + " --size 64 --steps 10",
               d / "refine.log");
   ASSERT_EQ(r.status, 0) << r.output;
   expect_same_views(d / "refined", d / "kept" / "refined", false);
@@ -251,7 +261,7 @@ TEST_F(GenerateCommand, MatteThenMultiviewAndRefineGiveGeneratesViews) {
   ASSERT_EQ(r.status, 0) << r.output;
   expect_same_views(d / "mv_prepared", d / "kept" / "multiview", false);
   r = run_cli("refine " + (d / "mv").string() + " --front " + (d / "kept" / "front.png").string() + " --prepared -o " +
-                  (d / "refined_prepared").string() + models() + " --size 64",
+                  (d / "refined_prepared").string() + models() + " --size 64 --steps 10",
               d / "refine_prepared.log");
   ASSERT_EQ(r.status, 0) << r.output;
   expect_same_views(d / "refined_prepared", d / "kept" / "refined", false);

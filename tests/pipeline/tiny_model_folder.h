@@ -37,6 +37,9 @@ inline void use_tiny_sizes(GenerateRequest& r) {
   // The tiny random networks draw noise, whose masks disagree: the silhouette fit would run its
   // 256^3 grid on every reconstruction here (it has its own tests in tests/isomer).
   r.reconstruct.silhouette_fit.enabled = false;
+  // A coarse mesh and texture: the reconstruction's quality has its own tests (tests/isomer, tests/cli).
+  r.reconstruct.faces = 500;
+  r.reconstruct.texture.atlas.texture_size = 128;
 }
 
 // A 96 px object photo: a disk with a vertical colour ramp on a transparent background.
