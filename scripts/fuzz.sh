@@ -8,8 +8,8 @@
 # coverage per target at the end.
 #   scripts/fuzz.sh [SECONDS] [TARGET...]
 #     targets: image obj mtl ply gltf config pickle zip safetensors onnx pth state_dict
-# Environment: FUZZ_JOBS (build jobs, default all cores); FUZZ_SEED (libFuzzer's -seed, so that a run from
-# the same corpus repeats; scripts/test.sh sets it).
+# Environment: FUZZ_JOBS (build jobs, and targets run at once; default all cores); FUZZ_SEED (libFuzzer's
+# -seed, so that a run from the same corpus repeats; scripts/test.sh sets it).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
@@ -82,35 +82,49 @@ declare -A max_len=([image]=131072 [obj]=65536 [mtl]=4096 [ply]=16384 [gltf]=163
 
 # Leaks inside libtorch itself are not reported (fuzz/lsan.supp says why).
 export LSAN_OPTIONS="suppressions=$root/fuzz/lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
-failed=()
-summary=()
-for t in "${targets[@]}"; do
-  corpus="$build/corpus/$t"
-  artifacts="$build/artifacts/$t"
-  log="$build/logs/$t.log"
+# One target: runs it and writes its summary line to $build/logs/<target>.summary ("FAILED" in it when
+# libFuzzer found something).
+fuzz_target() {
+  local t=$1
+  local corpus="$build/corpus/$t" artifacts="$build/artifacts/$t" log="$build/logs/$t.log"
   mkdir -p "$corpus" "$artifacts" "$(dirname "$log")"
-  echo "[fuzz] $t: ${seconds}s"
-  dict=()
+  local dict=() seed=()
   [ -f "fuzz/dict/$t.dict" ] && dict=(-dict="fuzz/dict/$t.dict")
-  seed=()
   [ -n "${FUZZ_SEED:-}" ] && seed=(-seed="$FUZZ_SEED")
-  rc=0
+  local rc=0
   "$build/fuzz/fuzz_$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len="${max_len[$t]}" \
     "${dict[@]}" "${seed[@]}" -print_final_stats=1 -artifact_prefix="$artifacts/" "$corpus" "fuzz/corpus/$t" "$build/seeds/$t" \
     </dev/null >"$log" 2>&1 || rc=$?
   # libFuzzer's last status line: "#N DONE cov: C ft: F corp: ..."; its stats: execs and exec/s.
+  local status cov ft execs rate result=ok
   status=$(grep -E '^#[0-9]+[[:space:]]+(DONE|pulse|NEW|REDUCE|INITED)' "$log" | tail -1 || true)
   cov=$(echo "$status" | grep -oE 'cov: [0-9]+' | cut -d' ' -f2 || true)
   ft=$(echo "$status" | grep -oE 'ft: [0-9]+' | cut -d' ' -f2 || true)
   execs=$(grep -E '^stat::number_of_executed_units:' "$log" | awk '{print $2}' || true)
   rate=$(grep -E '^stat::average_exec_per_sec:' "$log" | awk '{print $2}' || true)
-  result=ok
   if [ $rc -ne 0 ]; then
     result="FAILED (exit $rc; see $log and $artifacts/)"
-    failed+=("$t")
     grep -E '^==[0-9]+==ERROR|runtime error|^SUMMARY|deadly signal|Test unit written' "$log" | head -5 || true
   fi
-  summary+=("$(printf '%-8s %10s execs %7s exec/s  cov %6s  ft %7s  %s' "$t" "${execs:-?}" "${rate:-?}" "${cov:-?}" "${ft:-?}" "$result")")
+  printf '%-8s %10s execs %7s exec/s  cov %6s  ft %7s  %s\n' "$t" "${execs:-?}" "${rate:-?}" "${cov:-?}" "${ft:-?}" \
+    "$result" >"$build/logs/$t.summary"
+}
+
+# Each target is single-threaded: as many run at once as there are cores (FUZZ_JOBS).
+jobs="${FUZZ_JOBS:-$(nproc)}"
+for t in "${targets[@]}"; do
+  while [ "$(jobs -rp | wc -l)" -ge "$jobs" ]; do wait -n || true; done
+  echo "[fuzz] $t: ${seconds}s"
+  rm -f "$build/logs/$t.summary"
+  fuzz_target "$t" &
+done
+wait
+failed=()
+summary=()
+for t in "${targets[@]}"; do
+  line=$(cat "$build/logs/$t.summary" 2>/dev/null || echo "$t: no result (the harness did not finish)")
+  summary+=("$line")
+  [[ "$line" == *FAILED* || "$line" == *"no result"* ]] && failed+=("$t")
 done
 
 echo "[fuzz] ${seconds}s per target:"
