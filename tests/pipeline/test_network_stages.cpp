@@ -67,13 +67,13 @@ TEST(NetworkStages, MultiViewThenNormalsGiveAViewSet) {
     const Image rgb = load_image(dir / "view_set" / view_file_name(v, false));
     const Image normal = load_image(dir / "view_set" / view_file_name(v, true));
     EXPECT_EQ(rgb.channels, 4);
-    EXPECT_EQ(rgb.width, 96);  // the largest input view: the photo
+    EXPECT_EQ(rgb.width, testing::kDiskPhotoSide);  // the largest input view: the photo
     EXPECT_EQ(normal.channels, 4);
     EXPECT_EQ(normal.width, 128);  // the model's 32 px, x4 by Real-ESRGAN
   }
   // The front view keeps the photo's mask, on its RGB image and its normal map.
   const Image front = load_image(dir / "view_set" / "front_rgb.png");
-  EXPECT_EQ(front.pixel(48, 50)[3], 1.f);
+  EXPECT_EQ(front.pixel(testing::kDiskCentreX, testing::kDiskCentreY)[3], 1.f);
   EXPECT_EQ(front.pixel(3, 3)[3], 0.f);
   const Image front_normal = load_image(dir / "view_set" / "front_normal.png");
   EXPECT_EQ(front_normal.pixel(64, 64)[3], 1.f);

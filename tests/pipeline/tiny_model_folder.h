@@ -42,14 +42,18 @@ inline void use_tiny_sizes(GenerateRequest& r) {
   r.reconstruct.texture.atlas.texture_size = 128;
 }
 
-// A 96 px object photo: a disk with a vertical colour ramp on a transparent background.
+// An object photo: a disk 60 px across with a vertical colour ramp, centred on a transparent 520 px
+// square. Wider than 512 px, so the preparation does not super-resolve it (input_photo.h), and the
+// prepared front image is the disk's 60 px crop, x4 in the upscale stage: the tiny runs stay small.
+inline constexpr int kDiskPhotoSide = 520;
+inline constexpr int kDiskCentreX = 260, kDiskCentreY = 262;
 inline void write_disk_photo(const std::filesystem::path& path) {
-  Image photo(96, 96, 4, 0.f);
-  for (int y = 0; y < 96; ++y)
-    for (int x = 0; x < 96; ++x)
-      if ((x - 48) * (x - 48) + (y - 50) * (y - 50) < 30 * 30) {
+  Image photo(kDiskPhotoSide, kDiskPhotoSide, 4, 0.f);
+  for (int y = 0; y < photo.height; ++y)
+    for (int x = 0; x < photo.width; ++x)
+      if ((x - kDiskCentreX) * (x - kDiskCentreX) + (y - kDiskCentreY) * (y - kDiskCentreY) < 30 * 30) {
         float* p = photo.pixel(x, y);
-        p[0] = 0.8f, p[1] = 0.2f + 0.004f * y, p[2] = 0.1f, p[3] = 1.f;
+        p[0] = 0.8f, p[1] = 0.2f + 0.004f * (y - kDiskCentreY + 50), p[2] = 0.1f, p[3] = 1.f;
       }
   save_image(photo, path);
 }
