@@ -24,8 +24,13 @@ const CommandRegistration registration{
                      "Output folder: the view set, {view}_rgb.png with masks and world-space {view}_normal.png")
           ->required();
       sub.add_option("--front", args->front,
-                     "Use this image (the object on a transparent background) as the front view instead of "
-                     "front_rgb.png, as `generate` does with the input photo");
+                     "Use this photo as the front view instead of front_rgb.png, prepared as `generate` prepares "
+                     "it (background removed when it has none, cropped to the object and made square), as "
+                     "`generate` does with the input photo");
+      sub.add_flag("--prepared", r.prepared_front,
+                   "--front is already prepared (front.png of `generate --keep-intermediates`): use it as it is")
+          ->needs("--front");
+      add_raw_matte_flag(sub, r.raw_matte);
       add_network_options(sub, args->network);
       sub.add_option("--steps", r.options.steps, "Denoising steps")->capture_default_str()->check(CLI::Range(1, 1000));
       sub.add_option("--guidance", r.options.guidance_scale, "Classifier-free guidance scale")

@@ -11,6 +11,8 @@
 #include "nn/pipelines/unique3d_normal.h"
 #include "nn/pipelines/upscale.h"
 #include "nn/preprocess/pil_resize.h"
+#include "pipeline/image_stages.h"
+#include "pipeline/model_check.h"
 #include "pipeline/model_folder.h"
 
 namespace u3d {
@@ -187,17 +189,27 @@ NetworkStageSummary predict_view_normals(const NormalRequest& request, ProgressL
   require(request.options.steps >= 1, "normal steps must be at least 1");
   require(request.options.size >= 8 && request.options.size % 8 == 0, "normal-map size must be a multiple of 8");
   std::array<Image, 4> views;
+  std::optional<Image> photo;  // `front` before its preparation
   for (View v : kAllViews) {
-    const std::filesystem::path path =
-        v == View::Front && request.front ? *request.front : request.views_dir / view_file_name(v, /*normal=*/false);
+    const bool photo_front = v == View::Front && request.front;
+    const std::filesystem::path path = photo_front ? *request.front : request.views_dir / view_file_name(v, false);
+    if (photo_front && !request.prepared_front) {
+      photo = load_photo(path);
+      continue;
+    }
     Image image = load_image(path);
     require(image.width == image.height, path.string() + ": views must be square (it is " +
-                                             std::to_string(image.width) + "x" + std::to_string(image.height) + ")");
+                                             std::to_string(image.width) + "x" + std::to_string(image.height) +
+                                             (photo_front ? "; without --prepared the photo is prepared first)" : ")"));
     require(image.channels >= 3, path.string() + ": views must be colour images");
     views[size_t(v)] = std::move(image);
   }
 
   NetworkStageSummary summary;
+  if (photo) {
+    require_networks(ModelFolder(request.network.models), {Network::kNormals});  // before the preparation runs
+    views[size_t(View::Front)] = run_prepare_stage(*photo, request.network, request.raw_matte, summary);
+  }
   const ViewSetImages result = run_normal_stage(views, request.network, request.options, summary);
   StageTimer write_timer("writing the view set");
   std::array<std::string, 4> rgb_names, normal_names;

@@ -45,10 +45,13 @@ struct NormalRequest {
   std::filesystem::path output_dir;            // receives the view set: _rgb.png and _normal.png per view
   NetworkOptions network;
   NormalOptions options;
+  bool prepared_front = false;  // `front` is the prepare stage's output (generate's front.png): used as it is
+  bool raw_matte = false;       // as run_prepare_stage (pipeline/image_stages.h)
 };
 
-// Checks the request and every image before loading any weights, runs the stage and writes the view set
-// only after it succeeded (a new folder appears whole or not at all).
+// Checks the request and every image before loading any weights, prepares `front` as `generate` does
+// (run_prepare_stage, pipeline/image_stages.h; not when prepared_front), runs the stage and writes the
+// view set only after it succeeded (a new folder appears whole or not at all).
 NetworkStageSummary predict_view_normals(const NormalRequest& request, ProgressListener* listener = nullptr);
 
 }  // namespace u3d

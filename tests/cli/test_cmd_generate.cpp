@@ -200,8 +200,9 @@ TEST_F(GenerateCommand, StageCommandsWriteTheLibrarysViews) {
 
 // The stage-by-stage recipe (README): `matte` and then `multiview` and `refine` on the cut-out give the
 // views `generate` keeps, byte for byte, for a photo without transparency (its background removed by the
-// tiny U^2-Net, its mask made solid) wider than 512 px (the preparation upscales none of it). --prepared
-// takes generate's front.png as it is, for the same views again; without it, front.png is prepared again.
+// tiny U^2-Net, its mask made solid) wider than 512 px (the preparation upscales none of it); `normals`
+// prepares its --front photo the same way. --prepared takes generate's front.png as it is, for the same
+// views again; without it, front.png is prepared again.
 TEST_F(GenerateCommand, MatteThenMultiviewAndRefineGiveGeneratesViews) {
   const fs::path d = *dir / "recipe";
   fs::create_directories(d);
@@ -265,6 +266,27 @@ TEST_F(GenerateCommand, MatteThenMultiviewAndRefineGiveGeneratesViews) {
               d / "refine_prepared.log");
   ASSERT_EQ(r.status, 0) << r.output;
   expect_same_views(d / "refined_prepared", d / "kept" / "refined", false);
+  // `normals --front` prepares the cut-out (not square: 520 x 500) as generate does: the front view of the
+  // view set is generate's front image, and --prepared on that image gives the same view set.
+  r = run_cli("normals " + (d / "refined").string() + " --front " + (d / "object.png").string() + " -o " +
+                  (d / "views").string() + models() + " --size 32 --steps 2",
+              d / "normals.log");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const Image front = load_image(d / "kept" / "front.png"), view = load_image(d / "views" / "front_rgb.png");
+  EXPECT_EQ(view.data, front.data);
+  r = run_cli("normals " + (d / "refined").string() + " --front " + (d / "kept" / "front.png").string() +
+                  " --prepared -o " + (d / "views_prepared").string() + models() + " --size 32 --steps 2",
+              d / "normals_prepared.log");
+  ASSERT_EQ(r.status, 0) << r.output;
+  expect_same_views(d / "views_prepared", d / "views", true);
+  // A photo given as prepared must be one: square.
+  r = run_cli("normals " + (d / "refined").string() + " --front " + (d / "object.png").string() + " --prepared -o " +
+                  (d / "never").string() + models() + " --size 32 --steps 2",
+              d / "normals_not_prepared.log");
+  EXPECT_EQ(r.status, 1 << 8) << r.output;
+  EXPECT_NE(r.output.find("without --prepared the photo is prepared first"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(d / "never"));
+
   // Without --prepared, the prepared image is prepared again (cropped once more, its colours put on white
   // again): other views, which is why the flag is there.
   r = run_cli("multiview " + (d / "kept" / "front.png").string() + " -o " + (d / "mv_twice").string() + models() +

@@ -10,6 +10,7 @@
 #include "core/memory.h"
 #include "core/synthetic_views.h"
 #include "core/view_set.h"
+#include "pipeline/image_stages.h"
 #include "pipeline/multiview_stage.h"
 #include "pipeline/network_stage.h"
 #include "pipeline/normal_stage.h"
@@ -62,19 +63,23 @@ TEST(NetworkStages, MultiViewThenNormalsGiveAViewSet) {
   n.options.size = 32;
   n.options.steps = 2;
   const NetworkStageSummary normals = predict_view_normals(n);
+  NetworkStageSummary prepare;
+  const Image prepared = quantized_8bit(run_prepare_stage(load_photo(n.front.value()), n.network, false, prepare));
   EXPECT_EQ(normals.written.size(), 8u);
   for (View v : kAllViews) {
     const Image rgb = load_image(dir / "view_set" / view_file_name(v, false));
     const Image normal = load_image(dir / "view_set" / view_file_name(v, true));
     EXPECT_EQ(rgb.channels, 4);
-    EXPECT_EQ(rgb.width, testing::kDiskPhotoSide);  // the largest input view: the photo
+    EXPECT_EQ(rgb.width, prepared.width);  // the largest input view: the prepared photo
     EXPECT_EQ(normal.channels, 4);
     EXPECT_EQ(normal.width, 128);  // the model's 32 px, x4 by Real-ESRGAN
   }
-  // The front view keeps the photo's mask, on its RGB image and its normal map.
+  // The front view is the photo prepared as generate prepares it, with its mask, which the front normal
+  // map takes too.
   const Image front = load_image(dir / "view_set" / "front_rgb.png");
-  EXPECT_EQ(front.pixel(testing::kDiskCentreX, testing::kDiskCentreY)[3], 1.f);
-  EXPECT_EQ(front.pixel(3, 3)[3], 0.f);
+  EXPECT_EQ(front.data, prepared.data);
+  EXPECT_EQ(front.pixel(front.width / 2, front.height / 2)[3], 1.f);
+  EXPECT_EQ(front.pixel(0, 0)[3], 0.f);
   const Image front_normal = load_image(dir / "view_set" / "front_normal.png");
   EXPECT_EQ(front_normal.pixel(64, 64)[3], 1.f);
   EXPECT_EQ(front_normal.pixel(2, 2)[3], 0.f);
