@@ -34,7 +34,7 @@ struct BatchArgs {
   fs::path json_path;
   ReconstructArgs reconstruct;
   NetworkArgs network;
-  bool no_refine = false;
+  bool no_refine = false, raw_matte = false;
   int steps = 0;  // 0: each stage's own
   nlohmann::json reconstruct_options, generate_options;  // given_options() of each mode
 };
@@ -43,7 +43,8 @@ struct BatchArgs {
 // those of the other mode.
 nlohmann::json given_options(const CLI::App& sub, BatchMode mode) {
   static const std::set<std::string> own = {"inputs", "--output", "--shard", "--shards", "--jobs-file", "--json", "--help"};
-  static const std::set<std::string> photos_only = {"--models", "--dtype", "--seed", "--no-refine", "--steps"};
+  static const std::set<std::string> photos_only = {"--models", "--dtype", "--seed", "--no-refine", "--raw-matte",
+                                                    "--steps"};
   static const std::set<std::string> view_folders_only = {"--normal-space"};
   const std::set<std::string>& other = mode == BatchMode::Generate ? view_folders_only : photos_only;
   nlohmann::json options = nlohmann::json::object();
@@ -99,6 +100,7 @@ void run(const BatchArgs& a) {
   GenerateRequest& g = spec.generate;
   g.network = a.network.resolved();
   g.refine = !a.no_refine;
+  g.raw_matte = a.raw_matte;
   if (a.steps > 0) g.multiview.steps = g.normals.steps = a.steps;
   g.reconstruct = spec.reconstruct.options;
   g.official_output_scale = spec.reconstruct.official_output_scale;
@@ -143,6 +145,8 @@ const CommandRegistration registration{
       add_reconstruct_options(sub, a->reconstruct);
       add_network_options(sub, a->network, /*seeded=*/true, /*models_required=*/false);
       sub.add_flag("--no-refine", a->no_refine, "Photos: skip the ControlNet-tile refinement (as `generate --no-refine`)");
+      sub.add_flag("--raw-matte", a->raw_matte,
+                   "Photos: keep the background-removal mask as the network draws it (as `generate --raw-matte`)");
       sub.add_option("--steps", a->steps, "Photos: denoising steps of the multi-view and normal models (default: 30 each)")
           ->check(CLI::Range(1, 1000));
       return [a, &sub] {

@@ -274,7 +274,7 @@ std::optional<nn::Precision> dtype_argument(const py::object& dtype) {
 
 struct GenerateArguments {
   py::object image, models, output, seed, steps, dtype, keep_intermediates, from_intermediates;
-  bool refine = true;
+  bool refine = true, raw_matte = false;
   py::object multiview_size, refine_size, normal_size;
   bool official_scale = false;
   MeshOptions mesh;
@@ -295,6 +295,7 @@ GenerateResult generate_mesh(const GenerateArguments& a) {
   if (!a.refine_size.is_none()) request.refine_options.size = int_in_range(a.refine_size, "refine_size", 32, 8192);
   if (!a.normal_size.is_none()) request.normals.size = int_in_range(a.normal_size, "normal_size", 16, 4096);
   request.refine = a.refine;
+  request.raw_matte = a.raw_matte;
   request.official_output_scale = a.official_scale;
   apply_mesh_options(a.mesh, request.reconstruct, request.texture_format);
   if (!a.output.is_none()) request.output = fspath(a.output);
@@ -520,7 +521,8 @@ PYBIND11_MODULE(unique3d, m) {
   m.def(
       "generate",
       [](const py::object& image, const py::object& models, const py::object& output, const py::object& seed,
-         const py::object& steps, const py::object& dtype, bool refine, const py::object& keep_intermediates,
+         const py::object& steps, const py::object& dtype, bool refine, bool raw_matte,
+         const py::object& keep_intermediates,
          const py::object& from_intermediates, const py::object& multiview_size, const py::object& refine_size,
          const py::object& normal_size, const py::object& faces, const std::string& colour,
          const py::object& texture_size, const std::string& texture_format, const py::object& coarse_steps,
@@ -529,7 +531,7 @@ PYBIND11_MODULE(unique3d, m) {
         GenerateArguments a;
         a.mesh.silhouette_fit = silhouette_fit;
         a.image = image, a.models = models, a.output = output, a.seed = seed, a.steps = steps, a.dtype = dtype;
-        a.refine = refine, a.keep_intermediates = keep_intermediates, a.from_intermediates = from_intermediates;
+        a.refine = refine, a.raw_matte = raw_matte, a.keep_intermediates = keep_intermediates, a.from_intermediates = from_intermediates;
         a.multiview_size = multiview_size, a.refine_size = refine_size, a.normal_size = normal_size;
         a.mesh.faces = faces, a.mesh.colour = colour, a.mesh.texture_size = texture_size;
         a.mesh.texture_format = texture_format, a.mesh.coarse_steps = coarse_steps, a.mesh.refine_steps = refine_steps;
@@ -538,7 +540,7 @@ PYBIND11_MODULE(unique3d, m) {
       },
       py::arg("image"), py::kw_only(), py::arg("models"), py::arg("output") = py::none(), py::arg("seed") = py::none(),
       py::arg("steps") = py::none(), py::arg("dtype") = py::none(), py::arg("refine") = true,
-      py::arg("keep_intermediates") = py::none(), py::arg("from_intermediates") = py::none(),
+      py::arg("raw_matte") = false, py::arg("keep_intermediates") = py::none(), py::arg("from_intermediates") = py::none(),
       py::arg("multiview_size") = py::none(), py::arg("refine_size") = py::none(), py::arg("normal_size") = py::none(),
       py::arg("faces") = py::none(), py::arg("colour") = "texture", py::arg("texture_size") = py::none(),
       py::arg("texture_format") = "png", py::arg("coarse_steps") = py::none(), py::arg("refine_steps") = py::none(),

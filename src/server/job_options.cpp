@@ -50,7 +50,7 @@ JobSpec make_job_spec(JobKind kind, const std::map<std::string, std::string>& fi
   const std::set<std::string> shared = {"faces", "colour", "texture_size"};
   const std::set<std::string> own = kind == JobKind::Reconstruct
                                         ? std::set<std::string>{"coarse_steps", "refine_steps"}
-                                        : std::set<std::string>{"seed", "steps", "dtype", "refine"};
+                                        : std::set<std::string>{"seed", "steps", "dtype", "refine", "raw_matte"};
   for (const auto& [field, value] : fields)
     if (!shared.count(field) && !own.count(field)) {
       std::string known;
@@ -90,6 +90,8 @@ JobSpec make_job_spec(JobKind kind, const std::map<std::string, std::string>& fi
   }
   if (auto it = fields.find("refine"); it != fields.end())
     spec.options["refine"] = g.refine = parse_choice(it->first, it->second, {"true", "false"}) == "true";
+  if (auto it = fields.find("raw_matte"); it != fields.end())
+    spec.options["raw_matte"] = g.raw_matte = parse_choice(it->first, it->second, {"true", "false"}) == "true";
   return spec;
 }
 

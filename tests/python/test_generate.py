@@ -135,6 +135,33 @@ def test_generate_takes_grey_and_palette_pil_images(tiny, tmp_path):
     assert not np.array_equal(prepared["grey", "pil"][..., 3], prepared["palette", "pil"][..., 3])
 
 
+def test_generate_raw_matte_is_the_commands(tiny, tmp_path):
+    """raw_matte=True keeps the background-removal network's mask as it is, as `generate --raw-matte` does:
+    on a photo without alpha (matted), the prepared front image is the command's, and not the default's
+    (the mask made solid)."""
+    from conftest import run_cli
+
+    def stop_at_multiview(event):
+        if event.kind == "stage_begin" and event.text == "multi-view generation":
+            raise KeyError("prepared")
+
+    from PIL import Image
+
+    models, photo = tiny
+    with Image.open(photo) as pil:
+        pil.convert("RGB").save(tmp_path / "opaque.png")
+    fronts = {}
+    for raw in (False, True):
+        with pytest.raises(KeyError, match="prepared"):
+            unique3d.generate(tmp_path / "opaque.png", models=models, raw_matte=raw,
+                              keep_intermediates=tmp_path / f"py_{raw}", progress=stop_at_multiview, **SMALL)
+        fronts[raw] = unique3d.read_image(tmp_path / f"py_{raw}" / "front.png")
+    assert not np.array_equal(fronts[False], fronts[True])
+    run_cli("generate", tmp_path / "opaque.png", "-o", tmp_path / "cli.glb", "--models", models, "--raw-matte",
+            "--keep-intermediates", tmp_path / "cli", *small_cli_options())
+    assert np.array_equal(unique3d.read_image(tmp_path / "cli" / "front.png"), fronts[True])
+
+
 def test_generate_cancels_and_checks_its_arguments(tiny, tmp_path):
     models, photo = tiny
     token = unique3d.CancelToken()

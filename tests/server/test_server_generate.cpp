@@ -26,6 +26,7 @@ TEST(ServerGenerate, APhotoJobShowsEveryStagesImagesAsTheyComeAndEndsWithAMesh) 
                                             {"seed", "3", "", ""},
                                             {"steps", "2", "", ""},
                                             {"dtype", "fp32", "", ""},
+                                            {"raw_matte", "true", "", ""},
                                             {"colour", "vertex", "", ""}});
   ASSERT_EQ(code, 202) << reply.dump();
   EXPECT_EQ(reply["kind"], "generate");
@@ -51,6 +52,7 @@ TEST(ServerGenerate, APhotoJobShowsEveryStagesImagesAsTheyComeAndEndsWithAMesh) 
   EXPECT_EQ(view, read_file(server.jobs_dir() / id / "intermediates" / "multiview" / "front_rgb.png"));
   const nlohmann::json s = server.status(id);
   EXPECT_EQ(s["options"]["seed"], 3);
+  EXPECT_EQ(s["options"]["raw_matte"], true);
   EXPECT_EQ(s["summary"]["precision"], "fp32");
   EXPECT_EQ(s["summary"]["stages"].size(), generate_stage_names().size());
   fs::remove_all(dir);
