@@ -28,6 +28,7 @@
 #include "nn/models/unet.h"
 #include "nn/precision.h"
 #include "nn/runtime.h"
+#include "nn/tensor_allocator.h"
 
 namespace {
 
@@ -88,6 +89,7 @@ void BM_UNetForward(benchmark::State& state) {
   const Case& c = cases.at(batch * 1000 + size);
   rusage before{};
   getrusage(RUSAGE_SELF, &before);
+  const TensorAllocatorStats stats_before = tensor_allocator_stats();
   torch::Tensor out;
   for (auto _ : state) {
     std::unique_ptr<torch::autograd::profiler::RecordProfile> profile;
@@ -100,8 +102,13 @@ void BM_UNetForward(benchmark::State& state) {
   state.counters["threads"] = at::get_num_threads();
   state.SetLabel(precision_name(g_precision));
   // Page faults were a large share of the time (freed tensors handed back to the kernel); peak RSS
-  // shows what keeping freed memory costs.
+  // shows what keeping freed memory costs. new_MB: the tensor allocator's new pages (nn/tensor_allocator.h),
+  // the large blocks' share of the faults (4 KiB each).
   state.counters["minor_faults"] = static_cast<double>(after.ru_minflt - before.ru_minflt);
+  const TensorAllocatorStats stats_after = tensor_allocator_stats();
+  state.counters["mapped_blocks"] = static_cast<double>(stats_after.mapped_blocks - stats_before.mapped_blocks);
+  state.counters["new_MB"] = static_cast<double>(stats_after.new_bytes - stats_before.new_bytes) / 1e6;
+  state.counters["reused_blocks"] = static_cast<double>(stats_after.reused_blocks - stats_before.reused_blocks);
   state.counters["peak_rss_GB"] = static_cast<double>(after.ru_maxrss) / (1024.0 * 1024.0);
   if (c.fp32_output.defined()) {
     const torch::Tensor ref = c.fp32_output.to(torch::kDouble);
