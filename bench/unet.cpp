@@ -7,7 +7,8 @@
 //                       (||out - fp32|| / ||fp32||); peak RSS then includes the fp32 model
 //   --profile=FILE      write a Chrome trace of the ATen ops of the timed forwards
 // bench/unet_reference.py times the same cases with diffusers for comparison.
-// fp32 matrix products run in the OpenMP build of OpenBLAS (see the RPATH note in CMakeLists.txt); `ldd
+// fp32 linear layers run in oneDNN on CPUs with AVX-512 (nn/layers/onednn_linear.h); other fp32 matrix
+// products run in the OpenMP build of OpenBLAS (see the RPATH note in CMakeLists.txt); `ldd
 // build/bench/bench_unet | grep blas` shows which build a run loads.
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
