@@ -7,7 +7,8 @@
 //                       (||out - fp32|| / ||fp32||); peak RSS then includes the fp32 model
 //   --profile=FILE      write a Chrome trace of the ATen ops of the timed forwards
 // bench/unet_reference.py times the same cases with diffusers for comparison.
-// fp32 matrix products run in the OpenMP build of OpenBLAS (see the RPATH note in CMakeLists.txt); `ldd
+// fp32 linear layers run in oneDNN on CPUs with AVX-512 (nn/layers/onednn_linear.h); other fp32 matrix
+// products run in the OpenMP build of OpenBLAS (see the RPATH note in CMakeLists.txt); `ldd
 // build/bench/bench_unet | grep blas` shows which build a run loads.
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
@@ -28,6 +29,7 @@
 #include "nn/models/unet.h"
 #include "nn/precision.h"
 #include "nn/runtime.h"
+#include "nn/tensor_allocator.h"
 
 namespace {
 
@@ -88,6 +90,7 @@ void BM_UNetForward(benchmark::State& state) {
   const Case& c = cases.at(batch * 1000 + size);
   rusage before{};
   getrusage(RUSAGE_SELF, &before);
+  const TensorAllocatorStats stats_before = tensor_allocator_stats();
   torch::Tensor out;
   for (auto _ : state) {
     std::unique_ptr<torch::autograd::profiler::RecordProfile> profile;
@@ -100,8 +103,13 @@ void BM_UNetForward(benchmark::State& state) {
   state.counters["threads"] = at::get_num_threads();
   state.SetLabel(precision_name(g_precision));
   // Page faults were a large share of the time (freed tensors handed back to the kernel); peak RSS
-  // shows what keeping freed memory costs.
+  // shows what keeping freed memory costs. new_MB: the tensor allocator's new pages (nn/tensor_allocator.h),
+  // the large blocks' share of the faults (4 KiB each).
   state.counters["minor_faults"] = static_cast<double>(after.ru_minflt - before.ru_minflt);
+  const TensorAllocatorStats stats_after = tensor_allocator_stats();
+  state.counters["mapped_blocks"] = static_cast<double>(stats_after.mapped_blocks - stats_before.mapped_blocks);
+  state.counters["new_MB"] = static_cast<double>(stats_after.new_bytes - stats_before.new_bytes) / 1e6;
+  state.counters["reused_blocks"] = static_cast<double>(stats_after.reused_blocks - stats_before.reused_blocks);
   state.counters["peak_rss_GB"] = static_cast<double>(after.ru_maxrss) / (1024.0 * 1024.0);
   if (c.fp32_output.defined()) {
     const torch::Tensor ref = c.fp32_output.to(torch::kDouble);

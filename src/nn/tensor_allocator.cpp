@@ -40,6 +40,7 @@ class TensorAllocator final : public c10::Allocator {
       large_[data] = bytes;
       mapped_bytes_ += bytes;
       ++stats_.mapped_blocks;
+      stats_.new_bytes += bytes;
     }
     report(data, static_cast<int64_t>(bytes));
     return {data, data, &TensorAllocator::release, c10::Device(c10::DeviceType::CPU)};
@@ -63,19 +64,47 @@ class TensorAllocator final : public c10::Allocator {
       c10::reportMemoryUsageToProfiler(data, bytes, 0, 0, c10::Device(c10::DeviceType::CPU));
   }
 
-  // The smallest cached block of at least `bytes` and at most an eighth more, taken out of the cache.
+  // A block of `bytes` made of cached pages, or nullptr when the cache is empty. The smallest cached
+  // block of at least `bytes` is taken, and what it has beyond `bytes` stays in the cache as a block of
+  // its own; without one that large, the largest cached block is grown to `bytes` (mremap keeps its
+  // pages, only the added ones are new).
   void* take_cached(size_t bytes) const {
+    Block taken{nullptr, 0};
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      auto smallest_fit = cache_.end(), largest = cache_.end();
+      for (auto it = cache_.begin(); it != cache_.end(); ++it) {
+        if (it->bytes >= bytes && (smallest_fit == cache_.end() || it->bytes < smallest_fit->bytes)) smallest_fit = it;
+        if (largest == cache_.end() || it->bytes > largest->bytes) largest = it;
+      }
+      const auto best = smallest_fit != cache_.end() ? smallest_fit : largest;
+      if (best == cache_.end()) return nullptr;
+      taken = *best;
+      cache_.erase(best);
+      cached_bytes_ -= taken.bytes;
+      ++stats_.reused_blocks;
+      if (taken.bytes > bytes) {
+        const Block rest{static_cast<char*>(taken.data) + bytes, taken.bytes - bytes};
+        cache_.push_back(rest);
+        cached_bytes_ += rest.bytes;
+        large_[rest.data] = rest.bytes;
+        large_[taken.data] = bytes;
+      }
+    }
+    if (taken.bytes >= bytes) return taken.data;
+    void* grown = mremap(taken.data, taken.bytes, bytes, MREMAP_MAYMOVE);
     std::lock_guard<std::mutex> lock(mutex_);
-    auto best = cache_.end();
-    for (auto it = cache_.begin(); it != cache_.end(); ++it)
-      if (it->bytes >= bytes && it->bytes <= bytes + bytes / 8 && (best == cache_.end() || it->bytes < best->bytes))
-        best = it;
-    if (best == cache_.end()) return nullptr;
-    void* data = best->data;
-    cached_bytes_ -= best->bytes;
-    cache_.erase(best);
-    ++stats_.reused_blocks;
-    return data;
+    large_.erase(taken.data);
+    if (grown == MAP_FAILED) {  // the old mapping is still there: give it up and map anew
+      --stats_.reused_blocks;
+      mapped_bytes_ -= taken.bytes;
+      munmap(taken.data, taken.bytes);
+      return nullptr;
+    }
+    large_[grown] = bytes;
+    mapped_bytes_ += bytes - taken.bytes;
+    stats_.new_bytes += bytes - taken.bytes;
+    return grown;
   }
 
   // Frees a large block: it goes to the cache, and the oldest cached ones are unmapped while the cache

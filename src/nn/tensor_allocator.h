@@ -1,10 +1,17 @@
 #pragma once
 // The CPU allocator libtorch's tensors come from once install_tensor_allocator() has run. Blocks of
 // kLargeBlockBytes and more (the networks' activations and most weights) get their own mappings; a
-// freed one waits in a bounded cache for the next request of the same size (a denoising step asks
-// for the same sizes in the same order every step) and is unmapped when the cache would exceed its
-// bound, so the memory the process holds beyond its live tensors stays within that bound. Smaller
-// blocks go to libtorch's own allocator (glibc's heap).
+// freed one waits in a bounded cache and is unmapped when the cache would exceed its bound, so the
+// memory the process holds beyond its live tensors stays within that bound. Smaller blocks go to
+// libtorch's own allocator (glibc's heap).
+//
+// A request takes cached pages of any size: the smallest cached block that holds it, split, with the
+// rest staying cached, or else the largest cached block grown to the size wanted (mremap moves its pages
+// without touching them). Only pages beyond the cache's are new, and only new pages are faulted in on
+// first write. With cached blocks served only to requests of their own size (within an eighth), a fp32
+// UNet forward (bench_unet, batch 8 at 32x32) mapped a hundred blocks anew and took about 630k minor
+// page faults: each fp32 convolution through ATen reorders its weights into a new buffer of 14-112 MiB,
+// and a 112 MiB buffer flushed the rest of the cache (docs/networks.md, "Memory").
 //
 // In glibc's heap the large blocks left holes that later blocks of other sizes could not use: a fp32
 // refinement step at 1024 px held about 1 GiB more than its live tensors that way (docs/networks.md,
@@ -27,6 +34,7 @@ struct TensorAllocatorStats {
   size_t cached_bytes = 0;   // of which freed and waiting in the cache
   size_t reused_blocks = 0;  // large requests served from the cache so far
   size_t mapped_blocks = 0;  // large requests that mapped a new block so far
+  size_t new_bytes = 0;      // bytes of new pages mapped so far (new blocks, and growth beyond cached pages)
 };
 TensorAllocatorStats tensor_allocator_stats();
 

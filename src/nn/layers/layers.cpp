@@ -1,6 +1,7 @@
 #include "nn/layers/layers.h"
 
 #include "nn/layers/group_norm_kernel.h"
+#include "nn/layers/onednn_linear.h"
 
 namespace u3d::nn {
 
@@ -9,7 +10,10 @@ LinearImpl::LinearImpl(int64_t in_features, int64_t out_features, bool has_bias,
   if (has_bias) bias = register_parameter("bias", torch::empty({out_features}, options), false);
 }
 
-torch::Tensor LinearImpl::forward(const torch::Tensor& x) { return torch::linear(x, weight, bias); }
+torch::Tensor LinearImpl::forward(const torch::Tensor& x) {
+  if (onednn_linear_applies(x, weight)) return onednn_linear(x, weight, bias);
+  return torch::linear(x, weight, bias);
+}
 
 Conv2dImpl::Conv2dImpl(int64_t in_channels, int64_t out_channels, int64_t kernel, int64_t stride_, int64_t padding_,
                        bool has_bias, const torch::TensorOptions& options)
