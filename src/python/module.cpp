@@ -522,16 +522,16 @@ PYBIND11_MODULE(unique3d, m) {
       "generate",
       [](const py::object& image, const py::object& models, const py::object& output, const py::object& seed,
          const py::object& steps, const py::object& dtype, bool refine, bool raw_matte,
-         const py::object& keep_intermediates,
-         const py::object& from_intermediates, const py::object& multiview_size, const py::object& refine_size,
-         const py::object& normal_size, const py::object& faces, const std::string& colour,
-         const py::object& texture_size, const std::string& texture_format, const py::object& coarse_steps,
-         const py::object& refine_steps, bool silhouette_fit, bool official_scale, const py::object& progress,
-         const py::object& cancel) {
+         const py::object& keep_intermediates, const py::object& from_intermediates, const py::object& multiview_size,
+         const py::object& refine_size, const py::object& normal_size, const py::object& faces,
+         const std::string& colour, const py::object& texture_size, const std::string& texture_format,
+         const py::object& coarse_steps, const py::object& refine_steps, bool silhouette_fit, bool official_scale,
+         const py::object& progress, const py::object& cancel) {
         GenerateArguments a;
         a.mesh.silhouette_fit = silhouette_fit;
         a.image = image, a.models = models, a.output = output, a.seed = seed, a.steps = steps, a.dtype = dtype;
-        a.refine = refine, a.raw_matte = raw_matte, a.keep_intermediates = keep_intermediates, a.from_intermediates = from_intermediates;
+        a.refine = refine, a.raw_matte = raw_matte, a.keep_intermediates = keep_intermediates,
+        a.from_intermediates = from_intermediates;
         a.multiview_size = multiview_size, a.refine_size = refine_size, a.normal_size = normal_size;
         a.mesh.faces = faces, a.mesh.colour = colour, a.mesh.texture_size = texture_size;
         a.mesh.texture_format = texture_format, a.mesh.coarse_steps = coarse_steps, a.mesh.refine_steps = refine_steps;
@@ -540,12 +540,12 @@ PYBIND11_MODULE(unique3d, m) {
       },
       py::arg("image"), py::kw_only(), py::arg("models"), py::arg("output") = py::none(), py::arg("seed") = py::none(),
       py::arg("steps") = py::none(), py::arg("dtype") = py::none(), py::arg("refine") = true,
-      py::arg("raw_matte") = false, py::arg("keep_intermediates") = py::none(), py::arg("from_intermediates") = py::none(),
-      py::arg("multiview_size") = py::none(), py::arg("refine_size") = py::none(), py::arg("normal_size") = py::none(),
-      py::arg("faces") = py::none(), py::arg("colour") = "texture", py::arg("texture_size") = py::none(),
-      py::arg("texture_format") = "png", py::arg("coarse_steps") = py::none(), py::arg("refine_steps") = py::none(),
-      py::arg("silhouette_fit") = true, py::arg("official_scale") = false, py::arg("progress") = py::none(),
-      py::arg("cancel") = py::none(),
+      py::arg("raw_matte") = false, py::arg("keep_intermediates") = py::none(),
+      py::arg("from_intermediates") = py::none(), py::arg("multiview_size") = py::none(),
+      py::arg("refine_size") = py::none(), py::arg("normal_size") = py::none(), py::arg("faces") = py::none(),
+      py::arg("colour") = "texture", py::arg("texture_size") = py::none(), py::arg("texture_format") = "png",
+      py::arg("coarse_steps") = py::none(), py::arg("refine_steps") = py::none(), py::arg("silhouette_fit") = true,
+      py::arg("official_scale") = false, py::arg("progress") = py::none(), py::arg("cancel") = py::none(),
       "The whole method, as `unique3d generate`: a photo (path, numpy array or PIL image) to a mesh.");
 
   m.def(

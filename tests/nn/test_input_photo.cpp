@@ -15,6 +15,9 @@ namespace {
 
 using namespace u3d::nn::test;
 
+// The tiny U^2-Net of the golden cases.
+std::filesystem::path tiny_matting() { return golden_dir("u2net_tiny") / "u2net_div8" / "u2net_div8_op17.onnx"; }
+
 TEST(InputPhoto, ThumbnailSizeKeepsTheAspectRatio) {
   EXPECT_EQ(thumbnail_size(100, 50, 2048), std::make_pair(int64_t{100}, int64_t{50}));
   EXPECT_EQ(thumbnail_size(2048, 2048, 2048), std::make_pair(int64_t{2048}, int64_t{2048}));
@@ -77,7 +80,7 @@ TEST(InputPhoto, OnlyPhotosAtMost512PxWideAreSuperResolved) {
       },
       [&] {
         ++matting_loads;
-        return MattingModel::load(golden_dir("u2net_tiny") / "u2net_div8" / "u2net_div8_op17.onnx", Precision::kFp32);
+        return MattingModel::load(tiny_matting(), Precision::kFp32);
       }};
   // A photo with a real alpha (so no background removal is forced): an opaque disc on transparency.
   auto photo = [](int64_t w, int64_t h) {
@@ -109,21 +112,21 @@ TEST(InputPhoto, AnOpaqueAlphaIsPreparedAsNoAlpha) {
   const InputPhotoModels models{[&] { return UpscaleModel::load(upscaler, Precision::kFp32); },
                                 [&] {
                                   ++matting_loads;
-                                  return MattingModel::load(
-                                      golden_dir("u2net_tiny") / "u2net_div8" / "u2net_div8_op17.onnx", Precision::kFp32);
+                                  return MattingModel::load(tiny_matting(), Precision::kFp32);
                                 }};
   torch::Tensor rgb = torch::full({96, 96, 3}, 140, torch::kUInt8);
   rgb.slice(0, 30, 70).slice(1, 25, 75).select(2, 0).fill_(230);
   const torch::Tensor rgba = torch::cat({rgb, torch::full({96, 96, 1}, 255, torch::kUInt8)}, 2);
   EXPECT_FALSE((UpscaleModel::load(upscaler, Precision::kFp32)->upscale(rgba).select(2, 3) == 255).all().item<bool>());
-  EXPECT_TRUE(torch::equal(prepare_input_photo(rgba, models, false, false), prepare_input_photo(rgb, models, false, false)));
+  EXPECT_TRUE(
+      torch::equal(prepare_input_photo(rgba, models, false, false), prepare_input_photo(rgb, models, false, false)));
   EXPECT_EQ(matting_loads, 2);
 }
 
 // matte_photo is rembg's remove with the mask made solid: the cut-out of the photo with solid_matte of the
 // network's mask, or with the mask itself for the raw matte.
 TEST(InputPhoto, MattePhotoCutsOutWithTheSolidMask) {
-  auto model = MattingModel::load(golden_dir("u2net_tiny") / "u2net_div8" / "u2net_div8_op17.onnx", Precision::kFp32);
+  auto model = MattingModel::load(tiny_matting(), Precision::kFp32);
   const torch::Tensor rgb = golden_tensors("isnet_tiny", "inputs").at("image_rgb_u8");
   const torch::Tensor mask = model->matte(rgb).contiguous();
   EXPECT_TRUE(torch::equal(matte_photo(rgb, *model, /*raw_matte=*/true), cutout(rgb, mask, MattingStyle::kRembg)));

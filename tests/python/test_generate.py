@@ -26,6 +26,12 @@ def tiny(tmp_path_factory):
     return folder / "models", folder / "photo.png"
 
 
+def stop_at_multiview(event):
+    """A progress callback that stops generate once the prepared photo is kept."""
+    if event.kind == "stage_begin" and event.text == "multi-view generation":
+        raise KeyError("prepared")
+
+
 def same_arrays(a, b):
     return a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
 
@@ -111,10 +117,6 @@ def test_generate_takes_grey_and_palette_pil_images(tiny, tmp_path):
     runs stop once the prepared photo is kept)."""
     from PIL import Image
 
-    def stop_at_multiview(event):
-        if event.kind == "stage_begin" and event.text == "multi-view generation":
-            raise KeyError("prepared")
-
     models, photo = tiny
     with Image.open(photo) as pil:
         rgba = pil.copy()
@@ -140,10 +142,6 @@ def test_generate_raw_matte_is_the_commands(tiny, tmp_path):
     on a photo without alpha (matted), the prepared front image is the command's, and not the default's
     (the mask made solid)."""
     from conftest import run_cli
-
-    def stop_at_multiview(event):
-        if event.kind == "stage_begin" and event.text == "multi-view generation":
-            raise KeyError("prepared")
 
     from PIL import Image
 
