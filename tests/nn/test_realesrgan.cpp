@@ -1,5 +1,6 @@
 // RRDBNet (Real-ESRGAN x4) against the realesrgan_tiny golden case, loaded from basicsr-named safetensors and
-// from both ONNX exports; the tiled upscaler against the untiled network; the uint8 RGB/RGBA wrapper.
+// from both ONNX exports; its CPU path (oneDNN, nn/models/rrdbnet_cpu.h) against the layer-by-layer one; the
+// tiled upscaler against the untiled network; the uint8 RGB/RGBA wrapper.
 #include <gtest/gtest.h>
 
 #include <unistd.h>
@@ -9,8 +10,11 @@
 #include "core/progress.h"
 #include "golden.h"
 #include "nn/checkpoint/onnx_weights.h"
+#include "nn/layers/layers.h"
 #include "nn/models/rrdbnet.h"
 #include "nn/pipelines/upscale.h"
+#include "nn/precision.h"
+#include "required_skip.h"
 
 namespace u3d::nn {
 namespace {
@@ -42,6 +46,67 @@ TEST(RealEsrgan, OnnxInitializersAreTheStateDict) {
   const TensorMap mapped = conv_weights_in_graph_order(graph, conv_module_names(*layout), "op17");
   ASSERT_EQ(mapped.size(), reference.size());
   for (const auto& [name, tensor] : reference) EXPECT_TRUE(torch::equal(mapped.at(name), tensor)) << name;
+}
+
+// max |a - b| / max |b|
+double relative_error(const torch::Tensor& a, const torch::Tensor& b) {
+  return (a.to(torch::kDouble) - b.to(torch::kDouble)).abs().max().item<double>() /
+         b.to(torch::kDouble).abs().max().item<double>();
+}
+
+// A network whose widths are multiples of every channel block (32 features, growth 16, 2 blocks), random.
+RRDBNet aligned_random_net() {
+  RRDBNetConfig config;
+  config.num_feat = 32;
+  config.num_grow = 16;
+  config.num_block = 2;
+  RRDBNet net(config, torch::TensorOptions());
+  torch::manual_seed(6);
+  randomize_parameters(*net, 0.05);
+  return net;
+}
+
+// The CPU path (blocked layout, fused post-ops, padded widths for the tiny golden net's 8 and 4 channels)
+// computes what the layers compute, in fp32 to rounding: a batch of two images of an odd size.
+TEST(RealEsrgan, CpuPathComputesWhatTheLayersComputeInFp32) {
+  torch::NoGradGuard no_grad;
+  torch::manual_seed(7);
+  const torch::Tensor input = torch::rand({2, 3, 13, 17});
+  RRDBNet tiny = load_rrdbnet(golden_dir("realesrgan_tiny") / "weights.safetensors");
+  RRDBNet aligned = aligned_random_net();
+  for (RRDBNet* net : {&tiny, &aligned}) {
+    SCOPED_TRACE((*net)->config.num_feat);
+    ASSERT_TRUE(RrdbCpuForward::applies(input, (*net)->conv_first->weight));
+    const torch::Tensor fast = (*net)->forward(input);
+    const torch::Tensor layers = (*net)->forward_layers(input);
+    ASSERT_EQ(fast.sizes(), layers.sizes());
+    EXPECT_EQ(fast.scalar_type(), torch::kFloat);
+    EXPECT_LE(relative_error(fast, layers), 1e-5);
+    // Each image of the batch is the image alone.
+    EXPECT_LE(relative_error(fast[1], (*net)->forward(input.slice(0, 1, 2))[0]), 1e-6);
+  }
+}
+
+// In bf16 the CPU path rounds once per convolution (the layers round after the convolution, the
+// LeakyReLU, the scaling and the sum): against the fp32 network it is as close as the layers or closer,
+// and within the bf16 golden tolerance.
+TEST(RealEsrgan, CpuPathInBf16StaysCloseToFp32) {
+  U3D_SKIP_UNLESS_BF16_KERNELS();
+  torch::NoGradGuard no_grad;
+  torch::manual_seed(8);
+  const torch::Tensor input = torch::rand({1, 3, 24, 20});
+  RRDBNet net = aligned_random_net();
+  const torch::Tensor reference = net->forward_layers(input);
+  set_precision(*net, Precision::kBf16);
+  ASSERT_TRUE(RrdbCpuForward::applies(input, net->conv_first->weight));
+  const torch::Tensor fast = net->forward(input);
+  EXPECT_EQ(fast.scalar_type(), torch::kFloat);
+  const double fast_error = relative_error(fast, reference);
+  const double layers_error = relative_error(net->forward_layers(input), reference);
+  std::printf("  bf16 vs fp32: CPU path %.3g, layers %.3g (relative to the largest output)\n", fast_error,
+              layers_error);
+  EXPECT_LE(fast_error, 2e-2);
+  EXPECT_LE(fast_error, 1.1 * layers_error);
 }
 
 class RealEsrganFiles : public ::testing::Test {
@@ -157,8 +222,8 @@ TEST(RealEsrgan, ASetOfImagesIsOneLoopOverAllItsTiles) {
   model.net = load_rrdbnet(golden_dir("realesrgan_tiny") / "weights.safetensors");
   model.tile = 8;
   torch::manual_seed(5);
-  const torch::Tensor rgb = torch::randint(0, 256, {12, 16, 3}, torch::kUInt8);   // 2 x 2 tiles
-  const torch::Tensor rgba = torch::randint(0, 256, {8, 8, 4}, torch::kUInt8);    // 1 tile, twice
+  const torch::Tensor rgb = torch::randint(0, 256, {12, 16, 3}, torch::kUInt8);  // 2 x 2 tiles
+  const torch::Tensor rgba = torch::randint(0, 256, {8, 8, 4}, torch::kUInt8);   // 1 tile, twice
   const std::vector<torch::Tensor> out = model.upscale({rgb, rgba});
   ASSERT_EQ(out.size(), 2u);
   EXPECT_EQ(steps.seen, (std::vector<std::pair<int, int>>{{1, 6}, {2, 6}, {3, 6}, {4, 6}, {5, 6}, {6, 6}}));

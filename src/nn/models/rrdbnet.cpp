@@ -77,6 +77,11 @@ RRDBNetImpl::RRDBNetImpl(const RRDBNetConfig& c, const torch::TensorOptions& o) 
 }
 
 torch::Tensor RRDBNetImpl::forward(const torch::Tensor& input) {
+  if (RrdbCpuForward::applies(input, conv_first->weight)) return cpu_->forward(*this, input);
+  return forward_layers(input);
+}
+
+torch::Tensor RRDBNetImpl::forward_layers(const torch::Tensor& input) {
   const torch::Tensor x = input.to(conv_first->weight.scalar_type());
   torch::Tensor feat = conv_first(x);
   torch::Tensor h = feat;

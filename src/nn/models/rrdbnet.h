@@ -7,11 +7,13 @@
 #include <torch/torch.h>
 
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "nn/checkpoint/tensor_map.h"
 #include "nn/layers/layers.h"
+#include "nn/models/rrdbnet_cpu.h"
 
 namespace u3d::nn {
 
@@ -47,11 +49,18 @@ class RRDBNetImpl : public torch::nn::Module {
  public:
   RRDBNetImpl(const RRDBNetConfig& config, const torch::TensorOptions& options);
   // [N, in, H, W] -> [N, out, 4H, 4W], raw (not clamped); runs in the weights' dtype and returns x's.
+  // On the CPU through oneDNN without copies between the layers (nn/models/rrdbnet_cpu.h), elsewhere
+  // layer by layer.
   torch::Tensor forward(const torch::Tensor& x);
+  // The same, layer by layer through the modules on any device (the CPU path's reference in tests).
+  torch::Tensor forward_layers(const torch::Tensor& x);
   RRDBNetConfig config;
   Conv2d conv_first{nullptr}, conv_body{nullptr}, conv_up1{nullptr}, conv_up2{nullptr}, conv_hr{nullptr},
       conv_last{nullptr};
   std::vector<RRDB> body;
+
+ private:
+  std::shared_ptr<RrdbCpuForward> cpu_ = std::make_shared<RrdbCpuForward>();
 };
 TORCH_MODULE(RRDBNet);
 
