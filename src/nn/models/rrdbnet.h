@@ -54,6 +54,8 @@ class RRDBNetImpl : public torch::nn::Module {
   torch::Tensor forward(const torch::Tensor& x);
   // The same, layer by layer through the modules on any device (the CPU path's reference in tests).
   torch::Tensor forward_layers(const torch::Tensor& x);
+  // The CPU path keeps its buffers from one call to the next while `keep` (RrdbCpuForward::keep_workspace).
+  void keep_workspace(bool keep) { cpu_->keep_workspace(keep); }
   RRDBNetConfig config;
   Conv2d conv_first{nullptr}, conv_body{nullptr}, conv_up1{nullptr}, conv_up2{nullptr}, conv_hr{nullptr},
       conv_last{nullptr};

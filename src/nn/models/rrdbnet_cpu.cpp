@@ -119,6 +119,8 @@ struct RrdbCpuForward::State {
   int64_t block = 0, in = 0, out = 0, feat = 0, grow = 0;  // feat, grow: padded
   DataType type = DataType::f32;
   std::vector<Plan> plans;
+  bool keep_workspace = false;
+  torch::Tensor workspace;  // kept while keep_workspace
 
   Tag blocked() const { return block == 16 ? Tag::nChw16c : Tag::nChw8c; }
   int64_t buffer_channels() const { return feat + 4 * grow; }
@@ -263,6 +265,12 @@ bool RrdbCpuForward::applies(const torch::Tensor& x, const torch::Tensor& weight
 RrdbCpuForward::RrdbCpuForward() : state_(std::make_unique<State>()) {}
 RrdbCpuForward::~RrdbCpuForward() = default;
 
+void RrdbCpuForward::keep_workspace(bool keep) {
+  std::lock_guard<std::mutex> lock(state_->mutex);
+  state_->keep_workspace = keep;
+  if (!keep) state_->workspace = torch::Tensor();
+}
+
 torch::Tensor RrdbCpuForward::forward(const RRDBNetImpl& net, const torch::Tensor& x) {
   TORCH_CHECK(x.size(1) == net.config.in_channels, "RRDBNet: input has ", x.size(1), " channels, the network expects ",
               net.config.in_channels);
@@ -279,29 +287,39 @@ torch::Tensor RrdbCpuForward::forward(const RRDBNetImpl& net, const torch::Tenso
   const int64_t h4 = kUp * kUp * h, w4 = kUp * kUp * w;
   torch::Tensor result = torch::empty({n, s.out, h4, w4}, x.options().dtype(out_type));
 
-  // Buffers from libtorch's allocator, which keeps freed blocks for the next tile (nn/tensor_allocator.h).
+  // Every buffer is a part of one workspace: kept between calls while keep_workspace is on (the tiles of
+  // an image are the same size), else from libtorch's allocator for this call.
   const int64_t element = static_cast<int64_t>(input.element_size());
-  auto bytes = [](size_t count) {
-    return torch::empty({static_cast<int64_t>(count)}, torch::TensorOptions().dtype(torch::kUInt8));
+  size_t total = 0;
+  auto part = [&](size_t count) {
+    const size_t offset = total;
+    total += (count + 63) / 64 * 64;
+    return offset;
   };
-  auto buffer = [&](int64_t channels, int64_t pixels) {
-    return bytes(static_cast<size_t>(channels * pixels * element));
-  };
-  std::array<torch::Tensor, 3> blocks{buffer(s.buffer_channels(), h * w), buffer(s.buffer_channels(), h * w),
-                                      buffer(s.buffer_channels(), h * w)};
-  const torch::Tensor feat = buffer(s.feat, h * w);
-  const torch::Tensor up2a = buffer(s.feat, 4 * h * w), up2b = buffer(s.feat, 4 * h * w);
-  const torch::Tensor up4a = buffer(s.feat, 16 * h * w), up4b = buffer(s.feat, 16 * h * w);
-  const torch::Tensor blocked_out = bytes(plan.pds[kLast].dst_desc().get_size());
-  const torch::Tensor scratch = bytes(plan.scratch);
+  auto activation = [&](int64_t channels, int64_t pixels) { return part(size_t(channels * pixels * element)); };
+  const std::array<size_t, 3> block_at{activation(s.buffer_channels(), h * w), activation(s.buffer_channels(), h * w),
+                                       activation(s.buffer_channels(), h * w)};
+  const size_t feat_at = activation(s.feat, h * w);
+  const size_t up2a_at = activation(s.feat, 4 * h * w), up2b_at = activation(s.feat, 4 * h * w);
+  const size_t up4a_at = activation(s.feat, 16 * h * w), up4b_at = activation(s.feat, 16 * h * w);
+  const size_t out_at = part(plan.pds[kLast].dst_desc().get_size());
+  const size_t scratch_at = part(plan.scratch);
+  torch::Tensor workspace = s.workspace;
+  if (!workspace.defined() || size_t(workspace.numel()) < total)
+    workspace = torch::empty({static_cast<int64_t>(total)}, torch::TensorOptions().dtype(torch::kUInt8));
+  if (s.keep_workspace) s.workspace = workspace;
+  uint8_t* const base = workspace.data_ptr<uint8_t>();
+  const std::array<uint8_t*, 3> blocks{base + block_at[0], base + block_at[1], base + block_at[2]};
+  uint8_t *const feat = base + feat_at, *const up2a = base + up2a_at, *const up2b = base + up2b_at,
+                 *const up4a = base + up4a_at, *const up4b = base + up4b_at, *const blocked_out = base + out_at;
 
   dnnl::stream stream(cpu_engine());
   const dnnl::memory scratch_memory({{static_cast<dnnl::memory::dim>(plan.scratch)}, DataType::u8, Tag::a},
-                                    cpu_engine(), scratch.data_ptr());
+                                    cpu_engine(), base + scratch_at);
   // Channel c of an image starts at c x H x W elements in the blocked layout (N = 1, c a multiple of the
   // block).
-  auto at_channel = [&](const torch::Tensor& t, int64_t channel, int64_t pixels) {
-    return static_cast<void*>(static_cast<uint8_t*>(t.data_ptr()) + channel * pixels * element);
+  auto at_channel = [&](uint8_t* buffer, int64_t channel, int64_t pixels) {
+    return buffer + channel * pixels * element;
   };
   auto run = [&](Layer& layer, void* src, void* dst, std::vector<void*> addends = {}) {
     const ConvPd& pd = plan.pds[layer.role];
@@ -328,31 +346,31 @@ torch::Tensor RrdbCpuForward::forward(const RRDBNetImpl& net, const torch::Tenso
   const int64_t pixels = h * w;
   for (int64_t i = 0; i < n; ++i) {
     size_t next = 0;
-    run(s.layers[next++], input[i].data_ptr(), feat.data_ptr());
-    std::memcpy(blocks[0].data_ptr(), feat.data_ptr(), static_cast<size_t>(s.feat * pixels * element));
+    run(s.layers[next++], input[i].data_ptr(), feat);
+    std::memcpy(blocks[0], feat, static_cast<size_t>(s.feat * pixels * element));
     // The RRDB's input is in blocks[a]'s first channels; its dense blocks go a -> b -> c -> b.
     size_t a = 0, b = 1, c = 2;
-    auto dense_block = [&](const torch::Tensor& buf, void* dst, std::vector<void*> addends) {
-      for (int k = 0; k < 4; ++k) run(s.layers[next++], buf.data_ptr(), at_channel(buf, s.feat + k * s.grow, pixels));
-      run(s.layers[next++], buf.data_ptr(), dst, std::move(addends));
+    auto dense_block = [&](uint8_t* buf, void* dst, std::vector<void*> addends) {
+      for (int k = 0; k < 4; ++k) run(s.layers[next++], buf, at_channel(buf, s.feat + k * s.grow, pixels));
+      run(s.layers[next++], buf, dst, std::move(addends));
     };
     for (size_t block = 0; block < net.body.size(); ++block) {
-      dense_block(blocks[a], blocks[b].data_ptr(), {blocks[a].data_ptr()});
-      dense_block(blocks[b], blocks[c].data_ptr(), {blocks[b].data_ptr()});
-      dense_block(blocks[c], blocks[b].data_ptr(), {blocks[c].data_ptr(), blocks[a].data_ptr()});
+      dense_block(blocks[a], blocks[b], {blocks[a]});
+      dense_block(blocks[b], blocks[c], {blocks[b]});
+      dense_block(blocks[c], blocks[b], {blocks[c], blocks[a]});
       std::swap(a, b);
     }
-    run(s.layers[next++], blocks[a].data_ptr(), blocks[b].data_ptr(), {feat.data_ptr()});
+    run(s.layers[next++], blocks[a], blocks[b], {feat});
     const Desc feat1 = s.activations(s.feat, h, w), feat2 = s.activations(s.feat, 2 * h, 2 * w),
                feat4 = s.activations(s.feat, h4, w4);
-    upsample(plan.up_small, feat1, feat2, blocks[b].data_ptr(), up2a.data_ptr());
-    run(s.layers[next++], up2a.data_ptr(), up2b.data_ptr());
-    upsample(plan.up_large, feat2, feat4, up2b.data_ptr(), up4a.data_ptr());
-    run(s.layers[next++], up4a.data_ptr(), up4b.data_ptr());
-    run(s.layers[next++], up4b.data_ptr(), up4a.data_ptr());
-    run(s.layers[next++], up4a.data_ptr(), blocked_out.data_ptr());
+    upsample(plan.up_small, feat1, feat2, blocks[b], up2a);
+    run(s.layers[next++], up2a, up2b);
+    upsample(plan.up_large, feat2, feat4, up2b, up4a);
+    run(s.layers[next++], up4a, up4b);
+    run(s.layers[next++], up4b, up4a);
+    run(s.layers[next++], up4a, blocked_out);
     const ConvPd& last = plan.pds[kLast];
-    dnnl::memory last_out(last.dst_desc(), cpu_engine(), blocked_out.data_ptr());
+    dnnl::memory last_out(last.dst_desc(), cpu_engine(), blocked_out);
     dnnl::memory plain_out(Desc({1, s.out, h4, w4}, last.dst_desc().data_type(), Tag::nchw), cpu_engine(),
                            result[i].data_ptr());
     plan.to_plain.execute(stream, last_out, plain_out);

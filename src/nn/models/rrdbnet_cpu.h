@@ -30,6 +30,11 @@ class RrdbCpuForward {
   // the kernels are kept per input size.
   torch::Tensor forward(const RRDBNetImpl& net, const torch::Tensor& x);
 
+  // Whether forward keeps its buffers (activations of every size it needs, about 0.5 GB in bf16 for a
+  // 266 px tile) for the next call instead of mapping them anew: on while the tiles of a set of images
+  // run (nn/pipelines/upscale.h), off (and the buffers freed) afterwards.
+  void keep_workspace(bool keep);
+
  private:
   struct State;
   std::unique_ptr<State> state_;

@@ -34,6 +34,12 @@ torch::Tensor upscale_tiled(RRDBNetImpl& net, const torch::Tensor& x, int64_t ti
     report();
     return out;
   }
+  // The tiles reuse one set of buffers, freed when the image is done (before its output is converted).
+  struct KeptWorkspace {
+    RRDBNetImpl& net;
+    explicit KeptWorkspace(RRDBNetImpl& n) : net(n) { net.keep_workspace(true); }
+    ~KeptWorkspace() { net.keep_workspace(false); }
+  } kept(net);
   const int64_t s = kUpscaleFactor;
   const int64_t tiles_y = (h + tile - 1) / tile, tiles_x = (w + tile - 1) / tile;
   torch::Tensor out = torch::empty({x.size(0), net.config.out_channels, h * s, w * s}, x.options());
