@@ -30,13 +30,14 @@ struct Variant {
 };
 
 // The ablations of the paper's Table 2, by reconstruct flag, after the mask-only visual hull baseline;
-// then the full method writing vertex colours instead of the default texture.
+// then the full method without the silhouette fit, and writing vertex colours instead of the default texture.
 const std::vector<Variant> kVariants = {
     {"visual hull", "--visual-hull"},
     {"init only", "--init-only"},
     {"ExplicitTarget everywhere", "--refine-target explicit"},
     {"ExplicitTarget where views disagree", "--refine-target disagree"},
     {"full", ""},  // the multi-view loss; 40k faces, a 2048 texture baked from the views
+    {"no silhouette fit", "--no-silhouette-fit"},  // the full method without the silhouette fit (issue 14)
     {"full, vertex colours", "--colour vertex"},  // the mesh as reconstructed (~160k faces)
 };
 

@@ -19,6 +19,11 @@
 // The surface comes from marching tetrahedra on that field, and quadric decimation brings it to the
 // requested face count, closed and manifold. The mesh itself may be open or self-intersecting: only its
 // depth as each view sees it is used.
+//
+// That whole-object fit replaces every part of the surface by the grid's carving, detail included. An
+// optimised mesh that keeps its volume but leaves a mask (a thin part off a mask, a part it lacks) is
+// therefore fitted locally (issue 40): its own signed distance, repaired by the masks' hull only within a
+// few voxels of where the masks contradict it (local_fit_field).
 #include <optional>
 
 #include "core/mesh.h"
@@ -57,7 +62,8 @@ struct SilhouetteFitOptions {
   int final_resolution = 256;
   int final_faces = 50000;  // the fitted optimised mesh is decimated to this
   // The optimised mesh is also fitted when its volume is below this share of the carved hull's,
-  // measured on a grid of check_resolution.
+  // measured on a grid of check_resolution; fitted whole then (the hidden volume it lost is repaired
+  // from the carving), and only locally when it holds this share and leaves a mask (fit_locally).
   float min_fill = 0.8f;
   int check_resolution = 128;
   // Below this share the optimised mesh has lost most of its volume (a sagged or perforated plate:
@@ -93,8 +99,10 @@ Mesh silhouette_hull(const ViewSet& views, int resolution, size_t target_faces);
 // The final check and fit of an optimised mesh (reconstruct.h, stage 4b); `smoothed` is the mesh as it
 // would be output. Empty when the smoothed mesh keeps every mask (IoU >= final_min_iou) and the
 // optimised mesh holds at least min_fill of the carved hull's volume. Otherwise the masks' hull when the
-// mesh holds less than hull_below_fill, else the fitted optimised mesh or the hull, whichever explains
-// the normal maps better (normal_map_error). Reports its measures as progress messages.
+// mesh holds less than hull_below_fill. Else, when the mesh holds at least min_fill and the smoothed mesh
+// is closed, the local fit of the smoothed mesh (fit_locally), otherwise the whole fitted optimised
+// mesh; that or the hull, whichever explains the normal maps better (normal_map_error). Reports its
+// measures as progress messages.
 std::optional<Mesh> fit_optimised_mesh(const Mesh& optimised, const Mesh& smoothed, const ViewSet& views,
                                        const SilhouetteFitOptions& options);
 
@@ -107,5 +115,17 @@ void drop_pieces_no_view_needs(Mesh& mesh, const ViewSet& views);
 // The fitted mesh on a grid of `resolution` voxels per axis, with at most `target_faces` faces
 // (closed, manifold, outward). Throws Error if the masks share no volume.
 Mesh fit_to_silhouettes(const Mesh& mesh, const ViewSet& views, int resolution, size_t target_faces);
+
+// The local fit (issue 40): the signed distance of `surface` (closed: the optimised mesh as it would be
+// output), repaired only near the samples where the masks contradict it: inside the surface but a
+// voxel or more outside a mask (cut by the masks' hull), or outside the surface on the ray of a mask
+// pixel it leaves uncovered, a voxel or more inside every mask (a part it lacks: joined by the hull
+// there, as the whole fit does). Within 4 samples of those the repaired field is blended linearly into
+// the surface's own; beyond, the surface is kept, detail that no view sees (a pit in a top) included.
+// Same layout and units as silhouette_fit_field.
+ScalarGrid local_fit_field(const Mesh& surface, const ViewSet& views, int resolution);
+
+// The surface of local_fit_field, decimated to at most `target_faces` faces (closed, manifold, outward).
+Mesh fit_locally(const Mesh& surface, const ViewSet& views, int resolution, size_t target_faces);
 
 }  // namespace u3d

@@ -1,6 +1,7 @@
 // Fitting a mesh to the visual hull of its masks (issue 14): a frame keeps its open bay when the
 // initial mesh bridged it, crossed plate sheets become one plate of positive thickness, a separate
-// part the mesh lost comes back, and what the mesh adds outside the masks is cut away.
+// part the mesh lost comes back, and what the mesh adds outside the masks is cut away. The local fit
+// (issue 40) brings a lost part back and keeps the rest of the surface.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,9 +11,11 @@
 #include "geometry/test_shapes.h"
 #include "geometry/icosphere.h"
 #include "geometry/mesh_topology.h"
+#include "geometry/quadric_decimation.h"
 #include "isomer/reconstruct.h"
 #include "isomer/silhouette_check.h"
 #include "isomer/silhouette_fit.h"
+#include "shape_fixtures.h"
 
 namespace u3d {
 namespace {
@@ -256,11 +259,79 @@ TEST(SilhouetteFit, PiecesNoViewNeedsAreDropped) {
   EXPECT_EQ(mesh.face_count(), 24u);
 }
 
+// Positive inside an axis-aligned box: the distance to its nearest face inside, negative outside.
+float box_field(const Vec3f& p, const Vec3f& lo, const Vec3f& hi) { return (p - lo).cwiseMin(hi - p).minCoeff(); }
+
+// A block with a pit in its top that no view sees into (the block's walls hide it from the four
+// horizontal views) and a round bump on its front, optionally with a thin post standing on the top's
+// right rim (only the post shows above the block in every view): the grid surface of the shape's
+// field, decimated. Volumes: block 0.49, pit 0.05, bump 0.0052, post 0.004.
+Mesh block_with_pit_and_bump(bool with_post) {
+  ScalarGrid grid;
+  grid.nx = grid.ny = grid.nz = 91;
+  grid.origin = Vec3f::Constant(-0.9f);
+  grid.spacing = 0.02f;
+  grid.values.resize(size_t(91 * 91 * 91));
+  for (int z = 0; z < 91; ++z)
+    for (int y = 0; y < 91; ++y)
+      for (int x = 0; x < 91; ++x) {
+        const Vec3f p = grid.position(x, y, z);
+        const float block = std::min(box_field(p, {-0.5f, -0.5f, -0.35f}, {0.5f, 0.2f, 0.35f}),
+                                     -box_field(p, {-0.25f, -0.05f, -0.2f}, {0.25f, 0.3f, 0.2f}));
+        const float bump = 0.2f - (p - Vec3f(0.f, -0.15f, 0.25f)).norm();
+        const float post = with_post ? box_field(p, {0.3f, 0.15f, -0.05f}, {0.4f, 0.6f, 0.05f}) : -1.f;
+        grid.values[grid.index(x, y, z)] = std::max({block, bump, post});
+      }
+  return decimate_closed_mesh(extract_zero_surface(grid), 16000);
+}
+
+// Issue 40: an optimised mesh that keeps its volume but lost a thin part (the post) is fitted locally:
+// the part comes back, and the rest of its surface is kept, the pit that no view sees included. The
+// whole-object fit of the same mesh fills the pit (no view sees it empty); the masks' hull also
+// fills it and draws the bump as a ridge across the whole front, which the normal maps rule out.
+TEST(SilhouetteFit, LocalFitRestoresALostPartAndKeepsTheRest) {
+  const Mesh truth = block_with_pit_and_bump(true), mesh = block_with_pit_and_bump(false);
+  const std::vector<Image> maps = test::render_normal_maps(truth, test::four_view_cameras(256));
+  std::array<Image, 4> rgb, normals;
+  std::array<std::string, 4> rgb_names, normal_names;
+  for (View v : kAllViews) {
+    const size_t k = size_t(v);
+    normals[k] = maps[k];
+    rgb[k] = Image(256, 256, 4, 0.5f);
+    for (size_t p = 0; p < rgb[k].pixel_count(); ++p) rgb[k].data[p * 4 + 3] = maps[k].data[p * 4 + 3];
+    rgb_names[k] = view_file_name(v, false);
+    normal_names[k] = view_file_name(v, true);
+  }
+  const ViewSet views = make_view_set(rgb, normals, NormalSpace::World, rgb_names, normal_names);
+  const double truth_volume = mesh_topology(truth).volume;
+  EXPECT_NEAR(truth_volume, 0.49 - 0.05 + 0.0052 + 0.004, 0.004);
+  EXPECT_LT(min_iou(mesh, views), 0.96f);  // the post is missing
+  const std::optional<float> fill = carved_hull_fill(mesh, views, 128);
+  ASSERT_TRUE(fill.has_value());
+  EXPECT_GT(*fill, 0.85f);  // the pit is the carved hull's only volume the mesh lacks, with the post
+
+  SilhouetteFitOptions options;
+  options.final_resolution = 128;
+  options.final_faces = 20000;
+  const std::optional<Mesh> fitted = fit_optimised_mesh(mesh, mesh, views, options);
+  ASSERT_TRUE(fitted.has_value());
+  const MeshTopology topo = mesh_topology(*fitted);
+  EXPECT_TRUE(topo.closed_manifold()) << topo.summary();
+  EXPECT_EQ(topo.components, 1);
+  EXPECT_GT(min_iou(*fitted, views), 0.97f);                           // the post is back
+  EXPECT_NEAR(topo.volume, truth_volume, 0.012);                       // and the pit kept (0.05)
+  EXPECT_NEAR(bounding_box(fitted->positions).max.z(), 0.45f, 0.02f);  // the bump's front
+
+  const Mesh whole = fit_to_silhouettes(mesh, views, 128, 20000);
+  EXPECT_GT(mesh_topology(whole).volume, truth_volume + 0.035);  // the pit filled
+}
+
 TEST(SilhouetteFit, BadOptionsAreErrors) {
   const ViewSet views = boxes_views(frame(), 64);
   const Mesh mesh = box_mesh({-0.6f, -0.6f, -0.08f}, {0.6f, 0.6f, 0.08f});
   EXPECT_THROW(fit_to_silhouettes(mesh, views, 2, 2000), Error);
   EXPECT_THROW(fit_to_silhouettes(mesh, views, 64, 10), Error);
+  EXPECT_THROW(fit_locally(mesh, views, 2, 2000), Error);
 }
 
 }  // namespace
