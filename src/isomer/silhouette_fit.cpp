@@ -65,6 +65,16 @@ struct DepthView {
 };
 
 // The surface of the masks' hull field, decimated to `target_faces`.
+// What each of the four views shows of `mesh`.
+std::vector<DepthView> depth_views(const Mesh& mesh, const ViewSet& views) {
+  std::vector<DepthView> depths;
+  for (View v : kAllViews) {
+    const Camera camera = view_camera(v, views[v].normals.width);
+    depths.push_back({camera, rasterize(mesh, camera), &views[v].normals});
+  }
+  return depths;
+}
+
 Mesh hull_surface(const ScalarGrid& hull, size_t target_faces) {
   Mesh surface = extract_zero_surface(hull);
   require(!surface.faces.empty(), "silhouette fit: the four masks share no volume");
@@ -157,11 +167,7 @@ void drop_pieces_no_view_needs(Mesh& mesh, const ViewSet& views) {
 
 ScalarGrid silhouette_fit_field(const Mesh& mesh, const ViewSet& views, int resolution) {
   const ScalarGrid hull = visual_hull_field(views, resolution, HullMasks::Normals);
-  std::vector<DepthView> depths;
-  for (View v : kAllViews) {
-    const Camera camera = view_camera(v, views[v].normals.width);
-    depths.push_back({camera, rasterize(mesh, camera), &views[v].normals});
-  }
+  const std::vector<DepthView> depths = depth_views(mesh, views);
   const float to_field = 0.5f / hull.spacing;  // world lengths in the hull's units (0.5 per voxel)
   const int n = hull.nx;                       // the grid is a cube
   ScalarGrid field = hull;
@@ -273,11 +279,7 @@ Mesh fit_to_silhouettes(const Mesh& mesh, const ViewSet& views, int resolution, 
 
 ScalarGrid local_fit_field(const Mesh& surface, const ViewSet& views, int resolution) {
   const ScalarGrid hull = visual_hull_field(views, resolution, HullMasks::Normals);
-  std::vector<DepthView> depths;
-  for (View v : kAllViews) {
-    const Camera camera = view_camera(v, views[v].normals.width);
-    depths.push_back({camera, rasterize(surface, camera), &views[v].normals});
-  }
+  const std::vector<DepthView> depths = depth_views(surface, views);
   const float to_field = 0.5f / hull.spacing;
   ScalarGrid field = hull;  // the same samples; clamped to +-1 in field units, as the hull
   sample_signed_distance(surface, 1.f / to_field, field);

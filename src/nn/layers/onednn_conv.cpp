@@ -1,8 +1,7 @@
 #include "nn/layers/onednn_conv.h"
 
+#include "nn/layers/onednn_common.h"
 #include "nn/precision.h"
-
-#include <dnnl.hpp>
 
 #include <array>
 #include <mutex>
@@ -17,24 +16,6 @@ namespace {
 using Dims = dnnl::memory::dims;
 using Tag = dnnl::memory::format_tag;
 using DataType = dnnl::memory::data_type;
-
-dnnl::engine& cpu_engine() {
-  static dnnl::engine engine(dnnl::engine::kind::cpu, 0);
-  return engine;
-}
-
-// What identifies the weights a plan was built from: replacing the tensor (set_data, a new load) changes
-// the storage, an in-place copy changes the version. Inference tensors (made under InferenceMode, e.g.
-// a model converted there) have no version counter; they cannot be modified outside InferenceMode.
-struct WeightKey {
-  const void* data = nullptr;
-  int64_t version = -1;
-  bool operator==(const WeightKey&) const = default;
-};
-
-WeightKey key_of(const torch::Tensor& weight) {
-  return {weight.data_ptr(), weight.is_inference() ? -1 : static_cast<int64_t>(weight._version())};
-}
 
 // Output sizes (height x width) up to which the direct kernel is taken over oneDNN's first choice.
 constexpr int64_t kSmallOutput = 16;
@@ -61,7 +42,7 @@ struct OnednnConv2d::State {
 
   const Plan& plan_for(const torch::Tensor& x, const torch::Tensor& weight, const torch::Tensor& bias, int64_t stride,
                        int64_t padding) {
-    const WeightKey current = key_of(weight);
+    const WeightKey current = weight_key(weight);
     if (!(current == key)) {
       plans.clear();
       packed.clear();
@@ -89,7 +70,7 @@ struct OnednnConv2d::State {
                                               src, weights_any, dst, strides, pad, pad);
     dnnl::primitive_attr attr;
     attr.set_scratchpad_mode(dnnl::scratchpad_mode::user);
-    dnnl::convolution_forward::primitive_desc pd(descriptor, attr, cpu_engine());
+    dnnl::convolution_forward::primitive_desc pd(descriptor, attr, onednn_cpu_engine());
     if (output[2] * output[3] <= kSmallOutput) {
       // oneDNN's first choice (brgconv) is slower there than its older direct kernel (1,280 channels
       // at 4x4, batch 8: 7.0 against 5.1 ms). next_impl() moves the descriptor itself along the list,
@@ -97,12 +78,12 @@ struct OnednnConv2d::State {
       bool found = false;
       do found = std::string(pd.impl_info_str()).starts_with("jit_bf16:");
       while (!found && pd.next_impl());
-      if (!found) pd = dnnl::convolution_forward::primitive_desc(descriptor, attr, cpu_engine());
+      if (!found) pd = dnnl::convolution_forward::primitive_desc(descriptor, attr, onednn_cpu_engine());
     }
     size_t index = 0;
     while (index < packed.size() && packed[index].desc != pd.weights_desc()) ++index;
     if (keep_packed && index == packed.size()) {
-      dnnl::memory target(pd.weights_desc(), cpu_engine());
+      dnnl::memory target(pd.weights_desc(), onednn_cpu_engine());
       reorder_weights(weight, target);
       packed.push_back({pd.weights_desc(), target});
     }
@@ -114,8 +95,8 @@ struct OnednnConv2d::State {
   static void reorder_weights(const torch::Tensor& weight, dnnl::memory& target) {
     const torch::Tensor plain = weight.contiguous();
     dnnl::memory source({{weight.size(0), weight.size(1), weight.size(2), weight.size(3)}, DataType::bf16, Tag::oihw},
-                        cpu_engine(), plain.data_ptr());
-    dnnl::stream stream(cpu_engine());
+                        onednn_cpu_engine(), plain.data_ptr());
+    dnnl::stream stream(onednn_cpu_engine());
     dnnl::reorder(source, target).execute(stream, source, target);
     stream.wait();
   }
@@ -148,8 +129,8 @@ torch::Tensor OnednnConv2d::forward(const torch::Tensor& x, const torch::Tensor&
   const Dims& o = plan.output;
   torch::Tensor out = torch::empty({o[0], o[1], o[2], o[3]}, x.options().memory_format(at::MemoryFormat::ChannelsLast));
   const auto& pd = plan.pd;
-  dnnl::memory src(pd.src_desc(), cpu_engine(), input.data_ptr());
-  dnnl::memory dst(pd.dst_desc(), cpu_engine(), out.data_ptr());
+  dnnl::memory src(pd.src_desc(), onednn_cpu_engine(), input.data_ptr());
+  dnnl::memory dst(pd.dst_desc(), onednn_cpu_engine(), out.data_ptr());
   // Without kept weights: reordered for this call into a buffer that is freed after it.
   torch::Tensor weight_buffer;
   dnnl::memory weights;
@@ -158,20 +139,21 @@ torch::Tensor OnednnConv2d::forward(const torch::Tensor& x, const torch::Tensor&
   } else {
     weight_buffer =
         torch::empty({static_cast<int64_t>(pd.weights_desc().get_size())}, torch::TensorOptions().dtype(torch::kUInt8));
-    weights = dnnl::memory(pd.weights_desc(), cpu_engine(), weight_buffer.data_ptr());
+    weights = dnnl::memory(pd.weights_desc(), onednn_cpu_engine(), weight_buffer.data_ptr());
     State::reorder_weights(weight, weights);
   }
   std::unordered_map<int, dnnl::memory> args{{DNNL_ARG_SRC, src}, {DNNL_ARG_WEIGHTS, weights}, {DNNL_ARG_DST, dst}};
   const torch::Tensor bias_c = bias.defined() ? bias.contiguous() : bias;
-  if (bias_c.defined()) args.emplace(DNNL_ARG_BIAS, dnnl::memory(pd.bias_desc(), cpu_engine(), bias_c.data_ptr()));
+  if (bias_c.defined())
+    args.emplace(DNNL_ARG_BIAS, dnnl::memory(pd.bias_desc(), onednn_cpu_engine(), bias_c.data_ptr()));
   // The kernel's work space comes from libtorch's allocator, which keeps freed blocks for reuse
   // (nn/tensor_allocator.h); oneDNN's own would stay allocated with every plan.
   torch::Tensor scratch;
   if (const size_t bytes = pd.scratchpad_desc().get_size(); bytes > 0) {
     scratch = torch::empty({static_cast<int64_t>(bytes)}, torch::TensorOptions().dtype(torch::kUInt8));
-    args.emplace(DNNL_ARG_SCRATCHPAD, dnnl::memory(pd.scratchpad_desc(), cpu_engine(), scratch.data_ptr()));
+    args.emplace(DNNL_ARG_SCRATCHPAD, dnnl::memory(pd.scratchpad_desc(), onednn_cpu_engine(), scratch.data_ptr()));
   }
-  dnnl::stream stream(cpu_engine());
+  dnnl::stream stream(onednn_cpu_engine());
   plan.primitive.execute(stream, args);
   stream.wait();
   return out;

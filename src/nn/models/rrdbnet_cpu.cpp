@@ -1,7 +1,5 @@
 #include "nn/models/rrdbnet_cpu.h"
 
-#include <dnnl.hpp>
-
 #include <algorithm>
 #include <array>
 #include <cstring>
@@ -10,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "nn/layers/onednn_common.h"
 #include "nn/models/rrdbnet.h"
 #include "nn/precision.h"
 
@@ -25,11 +24,6 @@ constexpr float kSlope = 0.2f;          // LeakyReLU negative slope (nn/models/r
 constexpr float kResidualScale = 0.2f;  // each dense block and RRDB adds 0.2 x its output
 constexpr int64_t kUp = 2;              // each upsampling step is nearest x2
 
-dnnl::engine& cpu_engine() {
-  static dnnl::engine engine(dnnl::engine::kind::cpu, 0);
-  return engine;
-}
-
 // The channel block of the layout oneDNN's direct kernels read and write on this CPU.
 int64_t channel_block() {
   const int isa = static_cast<int>(dnnl::get_effective_cpu_isa());
@@ -39,12 +33,6 @@ int64_t channel_block() {
 int64_t round_up(int64_t value, int64_t block) { return (value + block - 1) / block * block; }
 
 DataType dnnl_type(torch::ScalarType type) { return type == torch::kBFloat16 ? DataType::bf16 : DataType::f32; }
-
-// What identifies a weight tensor's contents (as in nn/layers/onednn_conv.cpp): replacing it changes
-// the storage, an in-place copy the version; inference tensors have no version.
-std::pair<const void*, int64_t> key_of(const torch::Tensor& t) {
-  return {t.data_ptr(), t.is_inference() ? -1 : static_cast<int64_t>(t._version())};
-}
 
 // The roles a convolution plays; layers with the same role share a kernel (their shapes and post-ops
 // are equal), each with its own packed weights.
@@ -90,9 +78,9 @@ struct Layer {
     const torch::Tensor plain = padded_weights();
     const torch::Tensor& w = conv->weight;
     dnnl::memory source({{plain.size(0), plain.size(1), w.size(2), w.size(3)}, dnnl_type(w.scalar_type()), Tag::oihw},
-                        cpu_engine(), plain.data_ptr());
-    dnnl::memory target(desc, cpu_engine());
-    dnnl::stream stream(cpu_engine());
+                        onednn_cpu_engine(), plain.data_ptr());
+    dnnl::memory target(desc, onednn_cpu_engine());
+    dnnl::stream stream(onednn_cpu_engine());
     dnnl::reorder(source, target).execute(stream, source, target);
     stream.wait();
     packed.emplace_back(desc, target);
@@ -114,7 +102,7 @@ struct RrdbCpuForward::State {
   };
 
   std::mutex mutex;
-  std::vector<std::pair<const void*, int64_t>> key;
+  std::vector<WeightKey> key;
   std::vector<Layer> layers;
   int64_t block = 0, in = 0, out = 0, feat = 0, grow = 0;  // feat, grow: padded
   DataType type = DataType::f32;
@@ -134,10 +122,10 @@ struct RrdbCpuForward::State {
         for (const Conv2d& c : {r->conv1, r->conv2, r->conv3, r->conv4, r->conv5}) convs.push_back(c.get());
     for (const Conv2d& c : {net.conv_body, net.conv_up1, net.conv_up2, net.conv_hr, net.conv_last})
       convs.push_back(c.get());
-    std::vector<std::pair<const void*, int64_t>> current;
+    std::vector<WeightKey> current;
     for (const Conv2dImpl* c : convs) {
-      current.push_back(key_of(c->weight));
-      current.push_back(key_of(c->bias));
+      current.push_back(weight_key(c->weight));
+      current.push_back(weight_key(c->bias));
     }
     if (current == key) return;
     key = std::move(current);
@@ -186,7 +174,7 @@ struct RrdbCpuForward::State {
     dnnl::primitive_attr attr;
     attr.set_post_ops(ops);
     attr.set_scratchpad_mode(dnnl::scratchpad_mode::user);
-    return ConvPd(desc, attr, cpu_engine());
+    return ConvPd(desc, attr, onednn_cpu_engine());
   }
 
   const Plan& plan_for(int64_t h, int64_t w, DataType out_type) {
@@ -230,8 +218,8 @@ struct RrdbCpuForward::State {
     const Desc out_blocked({1, out, h4, w4}, out_type, blocked());
     p.pds[kLast] = make_conv(activations(feat, h4, w4), out_blocked, *like[kLast], {});
     p.to_plain =
-        dnnl::reorder(dnnl::memory(out_blocked, cpu_engine(), DNNL_MEMORY_NONE),
-                      dnnl::memory(Desc({1, out, h4, w4}, out_type, Tag::nchw), cpu_engine(), DNNL_MEMORY_NONE));
+        dnnl::reorder(dnnl::memory(out_blocked, onednn_cpu_engine(), DNNL_MEMORY_NONE),
+                      dnnl::memory(Desc({1, out, h4, w4}, out_type, Tag::nchw), onednn_cpu_engine(), DNNL_MEMORY_NONE));
     for (size_t r = 0; r < kRoles; ++r) {
       p.convs[r] = dnnl::convolution_forward(p.pds[r]);
       p.scratch = std::max(p.scratch, p.pds[r].scratchpad_desc().get_size());
@@ -242,7 +230,7 @@ struct RrdbCpuForward::State {
       const dnnl::resampling_forward::primitive_desc pd(
           dnnl::resampling_forward::desc(dnnl::prop_kind::forward_inference, dnnl::algorithm::resampling_nearest, src,
                                          dst),
-          attr, cpu_engine());
+          attr, onednn_cpu_engine());
       p.scratch = std::max(p.scratch, pd.scratchpad_desc().get_size());
       return dnnl::resampling_forward(pd);
     };
@@ -313,9 +301,9 @@ torch::Tensor RrdbCpuForward::forward(const RRDBNetImpl& net, const torch::Tenso
   uint8_t *const feat = base + feat_at, *const up2a = base + up2a_at, *const up2b = base + up2b_at,
                  *const up4a = base + up4a_at, *const up4b = base + up4b_at, *const blocked_out = base + out_at;
 
-  dnnl::stream stream(cpu_engine());
+  dnnl::stream stream(onednn_cpu_engine());
   const dnnl::memory scratch_memory({{static_cast<dnnl::memory::dim>(plan.scratch)}, DataType::u8, Tag::a},
-                                    cpu_engine(), base + scratch_at);
+                                    onednn_cpu_engine(), base + scratch_at);
   // Channel c of an image starts at c x H x W elements in the blocked layout (N = 1, c a multiple of the
   // block).
   auto at_channel = [&](uint8_t* buffer, int64_t channel, int64_t pixels) {
@@ -324,22 +312,22 @@ torch::Tensor RrdbCpuForward::forward(const RRDBNetImpl& net, const torch::Tenso
   auto run = [&](Layer& layer, void* src, void* dst, std::vector<void*> addends = {}) {
     const ConvPd& pd = plan.pds[layer.role];
     std::unordered_map<int, dnnl::memory> args{
-        {DNNL_ARG_SRC, dnnl::memory(pd.src_desc(), cpu_engine(), src)},
+        {DNNL_ARG_SRC, dnnl::memory(pd.src_desc(), onednn_cpu_engine(), src)},
         {DNNL_ARG_WEIGHTS, layer.weights_for(pd.weights_desc())},
-        {DNNL_ARG_BIAS, dnnl::memory(pd.bias_desc(), cpu_engine(), layer.bias.data_ptr())},
-        {DNNL_ARG_DST, dnnl::memory(pd.dst_desc(), cpu_engine(), dst)},
+        {DNNL_ARG_BIAS, dnnl::memory(pd.bias_desc(), onednn_cpu_engine(), layer.bias.data_ptr())},
+        {DNNL_ARG_DST, dnnl::memory(pd.dst_desc(), onednn_cpu_engine(), dst)},
         {DNNL_ARG_SCRATCHPAD, scratch_memory}};
     // The binary post-ops are the 2nd and 4th of their chains (after a scaling) or the only one.
     const std::array<int, 2> index = layer.role == kBody ? std::array<int, 2>{0, 0} : std::array<int, 2>{1, 3};
     for (size_t i = 0; i < addends.size(); ++i)
       args.emplace(DNNL_ARG_ATTR_MULTIPLE_POST_OP(index[i]) | DNNL_ARG_SRC_1,
-                   dnnl::memory(s.activations(s.feat, plan.h, plan.w), cpu_engine(), addends[i]));
+                   dnnl::memory(s.activations(s.feat, plan.h, plan.w), onednn_cpu_engine(), addends[i]));
     plan.convs[layer.role].execute(stream, args);
   };
   auto upsample = [&](const dnnl::resampling_forward& primitive, const Desc& src_desc, const Desc& dst_desc, void* src,
                       void* dst) {
-    primitive.execute(stream, {{DNNL_ARG_SRC, dnnl::memory(src_desc, cpu_engine(), src)},
-                               {DNNL_ARG_DST, dnnl::memory(dst_desc, cpu_engine(), dst)},
+    primitive.execute(stream, {{DNNL_ARG_SRC, dnnl::memory(src_desc, onednn_cpu_engine(), src)},
+                               {DNNL_ARG_DST, dnnl::memory(dst_desc, onednn_cpu_engine(), dst)},
                                {DNNL_ARG_SCRATCHPAD, scratch_memory}});
   };
 
@@ -370,8 +358,8 @@ torch::Tensor RrdbCpuForward::forward(const RRDBNetImpl& net, const torch::Tenso
     run(s.layers[next++], up4b, up4a);
     run(s.layers[next++], up4a, blocked_out);
     const ConvPd& last = plan.pds[kLast];
-    dnnl::memory last_out(last.dst_desc(), cpu_engine(), blocked_out);
-    dnnl::memory plain_out(Desc({1, s.out, h4, w4}, last.dst_desc().data_type(), Tag::nchw), cpu_engine(),
+    dnnl::memory last_out(last.dst_desc(), onednn_cpu_engine(), blocked_out);
+    dnnl::memory plain_out(Desc({1, s.out, h4, w4}, last.dst_desc().data_type(), Tag::nchw), onednn_cpu_engine(),
                            result[i].data_ptr());
     plan.to_plain.execute(stream, last_out, plain_out);
   }
