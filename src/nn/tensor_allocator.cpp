@@ -36,6 +36,7 @@ class TensorAllocator final : public c10::Allocator {
     if (!data) {
       data = mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
       TORCH_CHECK(data != MAP_FAILED, "tensor allocator: not enough memory: you tried to allocate ", n, " bytes");
+      madvise(data, bytes, MADV_HUGEPAGE);
       std::lock_guard<std::mutex> lock(mutex_);
       large_[data] = bytes;
       mapped_bytes_ += bytes;

@@ -13,6 +13,11 @@
 // page faults: each fp32 convolution through ATen reorders its weights into a new buffer of 14-112 MiB,
 // and a 112 MiB buffer flushed the rest of the cache (docs/networks.md, "Memory").
 //
+// New large blocks ask for transparent huge pages (madvise; where the system's THP setting is "madvise"
+// or "always"): their first writes then fault 2 MiB at a time instead of 4 KiB. On the 2-core VMs here a
+// first write to fresh memory costs ~4 s/GiB in 4 KiB pages and ~1.7 s/GiB in huge ones; the fp32 UNet
+// forward (bench_unet) went from ~153k to ~11k minor faults.
+//
 // In glibc's heap the large blocks left holes that later blocks of other sizes could not use: a fp32
 // refinement step at 1024 px held about 1 GiB more than its live tensors that way (docs/networks.md,
 // "Memory"). Mapping each of them anew instead (a lower M_MMAP_THRESHOLD) faults their pages in again
