@@ -11,7 +11,7 @@ PACKAGES=(
   libopencv-dev libeigen3-dev libopen3d-dev libtinygltf-dev
   libcli11-dev nlohmann-json3-dev libstb-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  zlib1g-dev libicu-dev libpng-dev libjpeg-dev
+  zlib1g-dev libdeflate-dev libicu-dev libpng-dev libjpeg-dev
   libcpp-httplib-dev libzip-dev chromium
   python3-dev pybind11-dev python3-numpy python3-pytest python3-pil
   libssl-dev slurm-wlm munge

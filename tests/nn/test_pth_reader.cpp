@@ -2,6 +2,7 @@
 // archives written here (caffe2's zip writer + a hand-assembled pickle) for the corner cases.
 #include <caffe2/serialize/inline_container.h>
 #include <gtest/gtest.h>
+#include <libdeflate.h>
 
 #include <fstream>
 #include <functional>
@@ -42,6 +43,57 @@ class PthTest : public ::testing::Test {
     writer.writeRecord("data.pkl", pickle.data(), pickle.size());
     for (const auto& [key, bytes] : records) writer.writeRecord("data/" + key, bytes.data(), bytes.size());
     writer.writeEndOfFile();
+    return path;
+  }
+
+  // The same archive as write_pth (plus a version record), assembled here with every record deflated,
+  // as a checkpoint re-zipped by a zip tool would be; torch.save itself stores them.
+  fs::path write_deflated_pth(const std::string& name, const std::string& pickle,
+                              const std::map<std::string, std::string>& records) {
+    std::map<std::string, std::string> entries = {{"data.pkl", pickle}, {"version", "3\n"}};
+    for (const auto& [key, bytes] : records) entries["data/" + key] = bytes;
+    std::string out, directory;
+    auto put = [](std::string& to, uint64_t value, int bytes) {
+      for (int i = 0; i < bytes; ++i) to.push_back(char((value >> (8 * i)) & 0xff));
+    };
+    libdeflate_compressor* compressor = libdeflate_alloc_compressor(6);
+    for (const auto& [entry, bytes] : entries) {
+      std::string packed(libdeflate_deflate_compress_bound(compressor, bytes.size()), '\0');
+      packed.resize(libdeflate_deflate_compress(compressor, bytes.data(), bytes.size(), packed.data(), packed.size()));
+      const std::string full = name + "/" + entry;
+      const uint32_t crc = libdeflate_crc32(0, bytes.data(), bytes.size());
+      const uint64_t local = out.size();
+      for (std::string* header : {&out, &directory}) {
+        const bool central = header == &directory;
+        put(*header, central ? 0x02014b50 : 0x04034b50, 4);
+        if (central) put(*header, 20, 2);  // version made by
+        for (uint64_t v : {20, 0, 8, 0, 0}) put(*header, v, 2);  // version needed, flags, deflate, time, date
+        put(*header, crc, 4);
+        put(*header, packed.size(), 4);
+        put(*header, bytes.size(), 4);
+        put(*header, full.size(), 2);
+        put(*header, 0, 2);  // extra field
+        if (central) {
+          for (int v = 0; v < 3; ++v) put(*header, 0, 2);  // comment, disk, internal attributes
+          put(*header, 0, 4);                              // external attributes
+          put(*header, local, 4);
+        }
+        *header += full;
+        if (!central) out += packed;
+      }
+    }
+    libdeflate_free_compressor(compressor);
+    const uint64_t directory_offset = out.size();
+    out += directory;
+    put(out, 0x06054b50, 4);
+    put(out, 0, 4);  // disk numbers
+    put(out, entries.size(), 2);
+    put(out, entries.size(), 2);
+    put(out, directory.size(), 4);
+    put(out, directory_offset, 4);
+    put(out, 0, 2);
+    const fs::path path = dir_ / (name + ".pth");
+    std::ofstream(path, std::ios::binary).write(out.data(), std::streamsize(out.size()));
     return path;
   }
 
@@ -364,4 +416,47 @@ TEST_F(PthTest, NestedStateDictKeysArePrefixed) {
   PickleWriter deeper;
   deeper.op('}').mark().str("params").op('}').mark().str("inner").op('}').op('u').op('u');
   expect_error(write_pth("deeper", deeper.finish(), {}), {"deeper.pth", "params.inner", "not a tensor"});
+}
+
+// torch.save stores its records; a checkpoint whose records were deflated by a zip tool loads the same.
+TEST_F(PthTest, DeflatedRecordsLoadAsStoredOnes) {
+  const torch::Tensor w = torch::arange(4096, torch::kFloat32).remainder(7);  // compresses well
+  PickleWriter p;
+  p.empty_ordered_dict().mark().str("proj.weight").tensor("FloatStorage", "0", 4096, 0, {64, 64}, {64, 1}).op('u');
+  const std::string pickle = p.finish();
+  const TensorMap stored = load_pth(write_pth("stored", pickle, {{"0", raw_bytes(w)}}));
+  const fs::path deflated = write_deflated_pth("deflated", pickle, {{"0", raw_bytes(w)}});
+  ASSERT_LT(fs::file_size(deflated), w.nbytes() / 4);
+  const TensorMap m = load_pth(deflated);
+  ASSERT_EQ(m.size(), 1u);
+  EXPECT_TRUE(torch::equal(m.at("proj.weight"), stored.at("proj.weight")));
+  EXPECT_TRUE(torch::equal(m.at("proj.weight"), w.view({64, 64})));
+
+  // A damaged deflate stream names the record and the tensor.
+  std::fstream f(deflated, std::ios::in | std::ios::out | std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(f)), {});
+  const size_t record = bytes.find("deflated/data/0");
+  ASSERT_NE(record, std::string::npos);
+  const size_t at = record + std::string("deflated/data/0").size() + 2;  // inside the compressed data
+  f.seekp(std::streamoff(at));
+  f.put(char(bytes[at] ^ 0x55));
+  f.close();
+  expect_error(deflated, {"deflated.pth", "proj.weight", "data/0"});
+}
+
+// Tensors are views of the mapped file, copied on write: writing to one changes neither the file nor
+// a later load.
+TEST_F(PthTest, LoadedTensorsAreTheProcesssOwnToWrite) {
+  const torch::Tensor w = torch::arange(5000, torch::kFloat32);
+  PickleWriter p;
+  p.empty_ordered_dict().mark().str("w").tensor("FloatStorage", "0", 5000, 0, {5000}, {1}).op('u');
+  const fs::path path = write_pth("writable", p.finish(), {{"0", raw_bytes(w)}});
+  const auto size = fs::file_size(path);
+  {
+    TensorMap m = load_pth(path);
+    m.at("w").fill_(-1.0f);
+    EXPECT_EQ(m.at("w").sum().item<float>(), -5000.0f);
+  }
+  EXPECT_EQ(fs::file_size(path), size);
+  EXPECT_TRUE(torch::equal(load_pth(path).at("w"), w));
 }

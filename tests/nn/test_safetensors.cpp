@@ -151,3 +151,20 @@ TEST_F(SafetensorsTest, SaveRejectsUnsupportedDtypeWithoutWriting) {
 }
 
 }  // namespace
+
+// Tensors are views of the mapped file, copied on write: writing to one changes neither the file nor
+// a later load, and a view outlives the map it came from.
+TEST_F(SafetensorsTest, LoadedTensorsAreTheProcesssOwnToWrite) {
+  const fs::path path = dir_ / "writable.safetensors";
+  const torch::Tensor w = torch::arange(5000, torch::kFloat32);
+  save_safetensors({{"a", w}, {"b", w * 2}}, path);
+  torch::Tensor kept;
+  {
+    TensorMap m = load_safetensors(path);
+    m.at("a").fill_(-1.0f);
+    EXPECT_EQ(m.at("a").sum().item<float>(), -5000.0f);
+    kept = m.at("b");
+  }
+  EXPECT_TRUE(torch::equal(kept, w * 2));
+  EXPECT_TRUE(torch::equal(load_safetensors(path).at("a"), w));
+}

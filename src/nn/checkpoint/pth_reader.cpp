@@ -1,6 +1,7 @@
 #include "nn/checkpoint/pth_reader.h"
 
-#include <caffe2/serialize/inline_container.h>
+#include <c10/core/CPUAllocator.h>
+#include <libdeflate.h>
 
 #include <fstream>
 #include <functional>
@@ -9,6 +10,7 @@
 #include <optional>
 
 #include "core/error.h"
+#include "nn/checkpoint/mapped_file.h"
 #include "nn/checkpoint/pickle_reader.h"
 #include "nn/checkpoint/torch_storage.h"
 #include "nn/checkpoint/zip_crc.h"
@@ -138,15 +140,15 @@ void check_zip_magic(const std::filesystem::path& path) {
           path.string() + ": not a PyTorch zip checkpoint (no zip header)");
 }
 
-// Reads records and checks each against the CRC-32 in the zip directory (libtorch does not). The
-// directory is read and checked before libtorch opens the archive: libtorch 1.13's reader leaks its zip
-// state when its constructor throws, so a malformed archive should not get that far.
+// Reads records in place from the mapped file and checks each against the CRC-32 in the zip directory
+// (torch.save stores records uncompressed, so a record is a view of the mapping; a deflated one, as a
+// re-zipped file may hold, is inflated into memory of its own).
 class RecordReader {
  public:
   explicit RecordReader(const std::filesystem::path& path)
-      : source_(path.string()), records_(checked_records(path)), reader_(source_) {}
+      : source_(path.string()), records_(checked_records(path)), file_(std::make_shared<MappedFile>(path, "checkpoint")) {}
 
-  bool has(const std::string& name) { return reader_.hasRecord(name); }
+  bool has(const std::string& name) const { return records_.count(name) > 0; }
   // The record's size from the zip directory, without reading it.
   std::optional<uint64_t> record_size(const std::string& name) const {
     auto it = records_.find(name);
@@ -154,17 +156,23 @@ class RecordReader {
   }
 
   // `user` says what needs the record, for errors ("tensor 'conv.weight'").
-  std::tuple<at::DataPtr, size_t> read(const std::string& name, const std::string& user) {
-    auto [data, size] = reader_.getRecord(name);
-    auto record = records_.find(name);
-    require(record != records_.end(), source_ + ": record " + name + " is not in the zip directory");
-    require(crc32_of(data.get(), size) == record->second.crc,
+  c10::Storage read(const std::string& name, const std::string& user) const {
+    auto found = records_.find(name);
+    require(found != records_.end(), source_ + ": record " + name + " is not in the zip directory");
+    const ZipRecord& record = found->second;
+    // zip_records checked the range against the size the file had then.
+    require(record.offset + record.stored_size <= file_->size(), source_ + ": " + user + ": record " + name +
+                                                                     " lies outside the file (it changed while read)");
+    file_->populate(record.offset, record.stored_size);
+    c10::Storage storage = record.deflated ? inflate(record, name, user)
+                                           : mapped_storage(file_, record.offset, record.size);
+    require(crc32_of(storage.data(), record.size) == record.crc,
             source_ + ": " + user + ": record " + name + " fails its CRC check (the file is corrupt)");
-    return {std::move(data), size};
+    return storage;
   }
 
  private:
-  // The zip directory, with the version record libtorch's reader requires (torch.save writes one).
+  // The zip directory, with the version record torch.save writes.
   static std::map<std::string, ZipRecord> checked_records(const std::filesystem::path& path) {
     std::map<std::string, ZipRecord> records = zip_records(path);
     require(records.count("version") || records.count(".data/version"),
@@ -172,15 +180,30 @@ class RecordReader {
     return records;
   }
 
+  c10::Storage inflate(const ZipRecord& record, const std::string& name, const std::string& user) const {
+    c10::Storage storage(c10::Storage::use_byte_size_t(), record.size, c10::GetCPUAllocator(), /*resizable=*/false);
+    std::unique_ptr<libdeflate_decompressor, void (*)(libdeflate_decompressor*)> decompressor(
+        libdeflate_alloc_decompressor(), &libdeflate_free_decompressor);
+    require(decompressor != nullptr, source_ + ": out of memory inflating record " + name);
+    size_t inflated = 0;
+    const libdeflate_result result =
+        libdeflate_deflate_decompress(decompressor.get(), file_->data() + record.offset, record.stored_size,
+                                      storage.data(), record.size, &inflated);
+    require(result == LIBDEFLATE_SUCCESS && inflated == record.size,
+            source_ + ": " + user + ": record " + name + " does not inflate to its " + std::to_string(record.size) +
+                " bytes (the file is corrupt)");
+    return storage;
+  }
+
   std::string source_;
   std::map<std::string, ZipRecord> records_;
-  caffe2::serialize::PyTorchStreamReader reader_;
+  std::shared_ptr<MappedFile> file_;
 };
 
 // Reads each storage record once, so tensors sharing a storage share it here too.
 class StorageCache {
  public:
-  StorageCache(RecordReader& reader, std::string source) : reader_(reader), source_(std::move(source)) {}
+  StorageCache(const RecordReader& reader, std::string source) : reader_(reader), source_(std::move(source)) {}
 
   c10::Storage get(const StorageRef& ref, const std::string& tensor_name) {
     auto it = cache_.find(ref.key);
@@ -192,14 +215,13 @@ class StorageCache {
     require(listed == expected, source_ + ": tensor '" + tensor_name + "': record " + record + " holds " +
                                     std::to_string(listed.value_or(0)) + " bytes, its storage needs " +
                                     std::to_string(expected));
-    auto [data, nbytes] = reader_.read(record, "tensor '" + tensor_name + "'");
-    c10::Storage storage(c10::Storage::use_byte_size_t(), nbytes, std::move(data), nullptr, false);
+    c10::Storage storage = reader_.read(record, "tensor '" + tensor_name + "'");
     cache_.emplace(ref.key, storage);
     return storage;
   }
 
  private:
-  RecordReader& reader_;
+  const RecordReader& reader_;
   std::string source_;
   std::map<std::string, c10::Storage> cache_;
 };
@@ -248,72 +270,60 @@ void add_entries(const pickle::Dict& dict, const std::string& prefix, const Tens
 }
 
 // The unpickled state dict of a checkpoint whose zip directory `reader` has read.
-pickle::Value read_state_dict(RecordReader& reader, const std::string& source) {
+pickle::Value read_state_dict(const RecordReader& reader, const std::string& source) {
   if (reader.has("byteorder")) {
-    auto [data, size] = reader.read("byteorder", "byte order");
-    require(std::string_view(static_cast<const char*>(data.get()), size) == "little",
+    const c10::Storage order = reader.read("byteorder", "byte order");
+    require(std::string_view(static_cast<const char*>(order.data()), order.nbytes()) == "little",
             source + ": big-endian checkpoints are not supported");
   }
   require(reader.has("data.pkl"), source + ": zip archive without data.pkl (not a torch.save file)");
-  auto [pkl, pkl_size] = reader.read("data.pkl", "the pickled state dict");
+  const c10::Storage pkl = reader.read("data.pkl", "the pickled state dict");
   StateDictHooks hooks(source);
-  pickle::Value root = pickle::unpickle(std::string_view(static_cast<const char*>(pkl.get()), pkl_size), hooks,
+  pickle::Value root = pickle::unpickle(std::string_view(static_cast<const char*>(pkl.data()), pkl.nbytes()), hooks,
                                         source + ":data.pkl");
   require(root.is<std::shared_ptr<pickle::Dict>>(),
           source + ": holds a " + root.type_name() + ", expected a state dict {name: tensor}");
   return root;
 }
 
-// Runs `body`, turning libtorch's zip errors into an Error naming the file.
-template <class F>
-TensorMap reading_archive(const std::filesystem::path& path, F&& body) {
-  check_zip_magic(path);
-  try {
-    return body(path.string());
-  } catch (const c10::Error& e) {
-    const std::string what = e.what_without_backtrace();
-    throw Error(path.string() + ": corrupt or truncated PyTorch zip archive (" + what.substr(0, what.find('\n')) + ")");
-  }
-}
-
 }  // namespace
 
 TensorMap load_pth(const std::filesystem::path& path) {
-  return reading_archive(path, [&](const std::string& source) {
-    RecordReader reader(path);
-    const pickle::Value root = read_state_dict(reader, source);
-    StorageCache storages(reader, source);
-    TensorMap tensors;
-    add_entries(
-        *root.as<std::shared_ptr<pickle::Dict>>(), "",
-        [&](const TensorRef& ref, const std::string& name) {
-          return torch::empty({0}, torch::TensorOptions().dtype(ref.storage->dtype))
-              .set_(storages.get(*ref.storage, name), ref.offset, ref.sizes, ref.strides);
-        },
-        source, tensors);
-    return tensors;
-  });
+  check_zip_magic(path);
+  const std::string source = path.string();
+  RecordReader reader(path);
+  const pickle::Value root = read_state_dict(reader, source);
+  StorageCache storages(reader, source);
+  TensorMap tensors;
+  add_entries(
+      *root.as<std::shared_ptr<pickle::Dict>>(), "",
+      [&](const TensorRef& ref, const std::string& name) {
+        return torch::empty({0}, torch::TensorOptions().dtype(ref.storage->dtype))
+            .set_(storages.get(*ref.storage, name), ref.offset, ref.sizes, ref.strides);
+      },
+      source, tensors);
+  return tensors;
 }
 
 TensorMap inspect_pth(const std::filesystem::path& path) {
-  return reading_archive(path, [&](const std::string& source) {
-    RecordReader reader(path);
-    const pickle::Value root = read_state_dict(reader, source);
-    TensorMap tensors;
-    add_entries(
-        *root.as<std::shared_ptr<pickle::Dict>>(), "",
-        [&](const TensorRef& ref, const std::string& name) {
-          const std::string record = storage_record(*ref.storage);
-          const auto size = reader.record_size(record);
-          require(size.has_value(), source + ": tensor '" + name + "': missing record " + record);
-          require(*size == storage_bytes(*ref.storage),
-                  source + ": tensor '" + name + "': record " + record + " holds " + std::to_string(*size) +
-                      " bytes, its storage needs " + std::to_string(storage_bytes(*ref.storage)));
-          return torch::empty(ref.sizes, torch::TensorOptions().dtype(ref.storage->dtype).device(torch::kMeta));
-        },
-        source, tensors);
-    return tensors;
-  });
+  check_zip_magic(path);
+  const std::string source = path.string();
+  RecordReader reader(path);
+  const pickle::Value root = read_state_dict(reader, source);
+  TensorMap tensors;
+  add_entries(
+      *root.as<std::shared_ptr<pickle::Dict>>(), "",
+      [&](const TensorRef& ref, const std::string& name) {
+        const std::string record = storage_record(*ref.storage);
+        const auto size = reader.record_size(record);
+        require(size.has_value(), source + ": tensor '" + name + "': missing record " + record);
+        require(*size == storage_bytes(*ref.storage),
+                source + ": tensor '" + name + "': record " + record + " holds " + std::to_string(*size) +
+                    " bytes, its storage needs " + std::to_string(storage_bytes(*ref.storage)));
+        return torch::empty(ref.sizes, torch::TensorOptions().dtype(ref.storage->dtype).device(torch::kMeta));
+      },
+      source, tensors);
+  return tensors;
 }
 
 }  // namespace u3d::nn

@@ -8,7 +8,8 @@
 // torch._utils._rebuild_tensor_v2 / _rebuild_parameter and the typed storages torch.<T>Storage
 // (Float, Double, Half, BFloat16, Long, Int, Short, Char, Byte, Bool): any other global (code the
 // file would run in Python) is refused. Storage offsets, strides and storages shared between tensors
-// are honoured: tensors are returned as views of their (shared) storage, on the CPU.
+// are honoured: tensors are returned as views of their (shared) storage, on the CPU, and a storage is
+// a view of the file's record in the mapped file (mapped_file.h), not a copy of it.
 // Every record is checked against its zip CRC-32. The legacy pre-1.6 format, truncated or corrupt
 // archives, non-tensor entries and views reaching outside their storage are u3d::Error naming the
 // file (and tensor).

@@ -1,10 +1,5 @@
 #include "nn/checkpoint/safetensors.h"
 
-#include <fcntl.h>
-#include <sys/mman.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <bit>
 #include <cstdint>
@@ -17,6 +12,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "nn/checkpoint/mapped_file.h"
 
 namespace u3d::nn {
 
@@ -53,44 +49,6 @@ const DtypeInfo* dtype_by_type(torch::ScalarType type) {
     if (type == d.type) return &d;
   return nullptr;
 }
-
-// Read-only memory map of a whole file, unmapped on destruction.
-class MappedFile {
- public:
-  explicit MappedFile(const fs::path& path) {
-    int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0) throw Error("cannot open safetensors file " + path.string() + ": " + std::strerror(errno));
-    struct stat st {};
-    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-      ::close(fd);
-      throw Error("cannot read safetensors file " + path.string() + ": not a regular file");
-    }
-    size_ = static_cast<std::size_t>(st.st_size);
-    if (size_ > 0) {
-      void* p = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE, fd, 0);
-      if (p == MAP_FAILED) {
-        ::close(fd);
-        throw Error("cannot memory-map safetensors file " + path.string() + ": " + std::strerror(errno));
-      }
-      data_ = static_cast<const std::uint8_t*>(p);
-      // Tensors are copied out front to back.
-      ::madvise(p, size_, MADV_SEQUENTIAL);
-    }
-    ::close(fd);
-  }
-  ~MappedFile() {
-    if (data_) ::munmap(const_cast<std::uint8_t*>(data_), size_);
-  }
-  MappedFile(const MappedFile&) = delete;
-  MappedFile& operator=(const MappedFile&) = delete;
-
-  const std::uint8_t* data() const { return data_; }
-  std::size_t size() const { return size_; }
-
- private:
-  const std::uint8_t* data_ = nullptr;
-  std::size_t size_ = 0;
-};
 
 struct Entry {
   std::string name;
@@ -195,16 +153,15 @@ std::vector<Entry> read_header(const std::uint8_t* head, std::uint64_t head_size
 
 TensorMap load_safetensors(const fs::path& path) {
   const std::string file = path.string();
-  MappedFile map(path);
+  const auto map = std::make_shared<MappedFile>(path, "safetensors file");
   std::uint64_t data_begin = 0;
-  const std::vector<Entry> entries = read_header(map.data(), map.size(), map.size(), file, data_begin);
-  const std::uint8_t* data = map.data() + data_begin;
+  const std::vector<Entry> entries = read_header(map->data(), map->size(), map->size(), file, data_begin);
 
+  map->populate(data_begin, map->size() - data_begin);  // the loader reads every tensor next
   TensorMap out;
   for (const Entry& e : entries) {
-    torch::Tensor t = torch::empty(e.shape, torch::TensorOptions().dtype(e.dtype->type));
-    if (e.end > e.begin) std::memcpy(t.data_ptr(), data + e.begin, e.end - e.begin);
-    out.emplace(e.name, std::move(t));
+    const c10::Storage storage = mapped_storage(map, data_begin + e.begin, e.end - e.begin);
+    out.emplace(e.name, torch::empty({0}, torch::TensorOptions().dtype(e.dtype->type)).set_(storage, 0, e.shape));
   }
   return out;
 }

@@ -1,8 +1,9 @@
 #pragma once
 // safetensors files: 8-byte little-endian header length, JSON header {name: {dtype, shape,
-// data_offsets}}, raw little-endian data. The file is memory-mapped; tensors are copied out in their
-// stored dtype (F32, F16, BF16, F64, I64, I32, U8, BOOL). Truncated files, overlapping or
-// out-of-range offsets and unknown dtypes are u3d::Error naming the file and tensor.
+// data_offsets}}, raw little-endian data. The file is memory-mapped and its tensors are views of the
+// mapping (mapped_file.h), in their stored dtype (F32, F16, BF16, F64, I64, I32, U8, BOOL). Truncated
+// files, overlapping or out-of-range offsets and unknown dtypes are u3d::Error naming the file and
+// tensor.
 #include <filesystem>
 
 #include "nn/checkpoint/tensor_map.h"

@@ -1,6 +1,6 @@
 #include "nn/checkpoint/zip_crc.h"
 
-#include <caffe2/serialize/crc_alt.h>  // defines its functions: include in this one file only
+#include <libdeflate.h>
 
 #include <algorithm>
 #include <fstream>
@@ -28,7 +28,7 @@ std::string read_at(std::ifstream& in, uint64_t offset, uint64_t size, const std
 
 }  // namespace
 
-uint32_t crc32_of(const void* data, size_t size) { return crc32_fast(data, size); }
+uint32_t crc32_of(const void* data, size_t size) { return libdeflate_crc32(0, data, size); }
 
 std::map<std::string, ZipRecord> zip_records(const std::filesystem::path& path) {
   const std::string source = path.string();
@@ -107,7 +107,8 @@ std::map<std::string, ZipRecord> zip_records(const std::filesystem::path& path) 
     if (slash == std::string::npos) throw bad("entry " + name + " is not inside a folder");
     if (i == 0) folder = name.substr(0, slash + 1);
     if (name.compare(0, slash + 1, folder) != 0) throw bad("entry " + name + " is outside the folder " + folder);
-    if (!records.emplace(name.substr(slash + 1), ZipRecord{crc, size}).second) throw bad("two entries named " + name);
+    const ZipRecord record{crc, size, offset + 30 + local_name_len + local_extra_len, compressed, method == 8};
+    if (!records.emplace(name.substr(slash + 1), record).second) throw bad("two entries named " + name);
     pos += 46 + name_len + extra_len + comment_len;
   }
   return records;
