@@ -30,4 +30,11 @@ void check_precision_supported(Precision precision, const torch::Device& device)
 // restore the dropped mantissa bits.
 void set_precision(torch::nn::Module& model, Precision precision);
 
+// The same types for a model that is built but not loaded yet, called once before loading it: its
+// parameters get fresh, uninitialised storage of their type in `precision`, all in one block (their
+// values are not read, and are lost), its buffers are converted. Loading then converts the checkpoint
+// once, straight into that type (an fp16 file into a bf16 model), instead of into fp32 and again by
+// set_precision.
+void allocate_in_precision(torch::nn::Module& model, Precision precision);
+
 }  // namespace u3d::nn

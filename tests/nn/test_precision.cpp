@@ -63,6 +63,36 @@ TEST(Precision, NormsKeepFp32WeightsAndEverythingElseConverts) {
   EXPECT_EQ(unet->conv_norm_out->weight.scalar_type(), torch::kFloat);
 }
 
+// Loading into a model given its bf16 types first converts the file once, straight into bf16: the same
+// bits as loading into fp32 and converting after (fp16 and fp32 files alike), with the parameters in one
+// block and buffers keeping their values.
+TEST(Precision, AllocatingInPrecisionLoadsWhatSetPrecisionGives) {
+  torch::NoGradGuard no_grad;
+  auto config = UNetConfig::from_json(golden_config("unet_base"), "unet_base/config.json");
+  const TensorMap fp32 = golden_tensors("unet_base", "weights");
+  TensorMap fp16;
+  for (const auto& [name, t] : fp32) fp16[name] = t.to(torch::kHalf);
+  for (const TensorMap* file : std::initializer_list<const TensorMap*>{&fp32, &fp16}) {
+    UNet2DConditionModel after(config, torch::TensorOptions());
+    load_state_dict(*after, *file, {}, "file");
+    set_precision(*after, Precision::kBf16);
+    UNet2DConditionModel before(config, torch::TensorOptions());
+    allocate_in_precision(*before, Precision::kBf16);
+    load_state_dict(*before, *file, {}, "file");
+    const auto expected = after->named_parameters();
+    const void* block = nullptr;
+    for (const auto& p : before->named_parameters()) {
+      const torch::Tensor& want = expected[p.key()];
+      EXPECT_EQ(p.value().scalar_type(), want.scalar_type()) << p.key();
+      EXPECT_TRUE(torch::equal(p.value(), want)) << p.key();
+      EXPECT_EQ(reinterpret_cast<uintptr_t>(p.value().data_ptr()) % 64, 0u) << p.key();
+      if (!block) block = p.value().storage().data();
+      EXPECT_EQ(p.value().storage().data(), block) << p.key() << " is not in the one block";
+    }
+    for (const auto& b : before->named_buffers()) EXPECT_TRUE(torch::equal(b.value(), after->named_buffers()[b.key()]));
+  }
+}
+
 TEST(Precision, NormsComputeInFp32ForBf16Activations) {
   torch::NoGradGuard no_grad;
   torch::manual_seed(3);

@@ -62,12 +62,12 @@ ConditioningModels load_conditioning_models(const DiffusersFolder& folder, Preci
                                SchedulerKind::EulerAncestral);
   m.image_encoder = ClipVisionModelWithProjection(
       ClipVisionConfig::from_json(read_json_file(clip_config), clip_config.string()), reader.options());
+  allocate_in_precision(*m.image_encoder, precision);
   reader.load(*m.image_encoder, clip_weights, clip_policy());
   m.vae = AutoencoderKL(AutoencoderKLConfig::from_json(read_json_file(vae_config), vae_config.string()),
                         reader.options());
+  allocate_in_precision(*m.vae, precision);
   reader.load(*m.vae, vae_weights);
-  set_precision(*m.image_encoder, precision);
-  set_precision(*m.vae, precision);
   return m;
 }
 

@@ -35,9 +35,9 @@ std::unique_ptr<MultiViewModel> MultiViewModel::load(const std::filesystem::path
   config.in_channels = 2 * config.out_channels;
   config.num_class_embeds = 8;
   m->unet = UNet2DConditionModel(config, reader.options());
+  allocate_in_precision(*m->unet, precision);
   reader.load(*m->unet, unet_weights);
   set_attention_processors(*m->unet, self_attention_only(std::make_shared<MultiViewAttentionProcessor>(kViews)));
-  set_precision(*m->unet, precision);
   return m;
 }
 

@@ -26,6 +26,7 @@ std::unique_ptr<ReferenceUNet> load_reference_unet(const DiffusersFolder& base, 
   const auto unet_weights = unique3d.file("unet_state_dict.pth");
   auto unet = std::make_unique<ReferenceUNet>(UNetConfig::from_json(read_json_file(unet_config), unet_config.string()),
                                               reader.options());
+  allocate_in_precision(*unet->unet, precision);  // the reference UNet is registered inside it
   TensorMap weights = reader.read(unet_weights);
   TensorMap reference = take_prefix(weights, kRefUnetPrefix);
   // Unique3D loads with strict=False; the one part its file may lack is the reference UNet.
@@ -35,7 +36,6 @@ std::unique_ptr<ReferenceUNet> load_reference_unet(const DiffusersFolder& base, 
     reader.load(*unet->reference, base_unet_weights);
   else
     reader.apply(*unet->reference, std::move(reference), {}, unet_weights.string() + " (" + kRefUnetPrefix + "*)");
-  set_precision(*unet->unet, precision);  // the reference UNet is registered inside it
   return unet;
 }
 

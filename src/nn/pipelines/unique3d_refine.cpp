@@ -89,15 +89,15 @@ std::unique_ptr<RefineEncoders> RefineEncoders::load(const RefineCheckpoints& c,
   m->feature_extractor = std::make_unique<ClipImageProcessor>(
       ClipImageProcessorConfig::from_json(read_json_file(f.processor_config), f.processor_config.string()));
   m->text_encoder = ClipTextModel(ClipTextConfig::from_json(read_json_file(f.text_config), f.text_config.string()), cpu);
+  allocate_in_precision(*m->text_encoder, precision);
   reader.load(*m->text_encoder, f.text_weights, clip_policy());
   m->image_encoder = ClipVisionModelWithProjection(
       ClipVisionConfig::from_json(read_json_file(f.image_encoder_config), f.image_encoder_config.string()), cpu);
+  allocate_in_precision(*m->image_encoder, precision);
   reader.load(*m->image_encoder, f.image_encoder_weights, clip_policy());
   m->vae = AutoencoderKL(AutoencoderKLConfig::from_json(read_json_file(f.vae_config), f.vae_config.string()), cpu);
+  allocate_in_precision(*m->vae, precision);
   reader.load(*m->vae, f.vae_weights);
-  set_precision(*m->text_encoder, precision);
-  set_precision(*m->image_encoder, precision);
-  set_precision(*m->vae, precision);
   return m;
 }
 
@@ -157,16 +157,17 @@ std::unique_ptr<RefineModel> RefineModel::load(const RefineCheckpoints& c, Preci
   m->scheduler = make_scheduler(parse_scheduler_config(read_json_file(f.scheduler_config), f.scheduler_config.string()),
                                 SchedulerKind::EulerAncestral);
   m->unet = UNet2DConditionModel(UNetConfig::from_json(read_json_file(f.unet_config), f.unet_config.string()), cpu);
+  allocate_in_precision(*m->unet, precision);
   reader.load(*m->unet, f.unet_weights);
   m->ip_adapter = load_ip_adapter(*m->unet, f.adapter_weights, 1.0, reader);
+  set_precision(*m->ip_adapter, precision);  // built to the file's sizes as it is read
   m->controlnet = ControlNetModel(
       ControlNetConfig::from_json(read_json_file(f.controlnet_config), f.controlnet_config.string()), cpu);
+  allocate_in_precision(*m->controlnet, precision);
   reader.load(*m->controlnet, f.controlnet_weights);
   m->vae = AutoencoderKL(AutoencoderKLConfig::from_json(read_json_file(f.vae_config), f.vae_config.string()), cpu);
+  allocate_in_precision(*m->vae, precision);
   reader.load(*m->vae, f.vae_weights);
-  for (torch::nn::Module* model : std::initializer_list<torch::nn::Module*>{m->unet.get(), m->ip_adapter.get(),
-                                                                            m->controlnet.get(), m->vae.get()})
-    set_precision(*model, precision);
   return m;
 }
 
