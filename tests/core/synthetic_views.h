@@ -2,11 +2,14 @@
 // Analytic view sets for the isomer tests: the four orthographic views of a sphere centred at the
 // origin and of a union of axis-aligned boxes, rendered exactly (no rasterizer involved).
 #include <cmath>
+#include <filesystem>
 #include <functional>
+#include <string>
 #include <utility>
 #include <vector>
 
 #include "core/mesh.h"
+#include "core/temp_dir.h"
 #include "core/view_set.h"
 
 namespace u3d::testing {
@@ -78,14 +81,6 @@ inline ViewSet boxes_views(const std::vector<Box>& boxes, int resolution) {
   return make_view_set(rgb, normal_maps, NormalSpace::World, rgb_names, normal_names);
 }
 
-}  // namespace u3d::testing
-
-#include <unistd.h>
-
-#include <filesystem>
-#include <string>
-
-namespace u3d::testing {
 
 // Writes a view set's images as the 8 PNG files of a VIEWS_DIR (normals re-encoded as (n+1)/2).
 inline void write_view_set(const ViewSet& views, const std::filesystem::path& dir) {
@@ -97,15 +92,6 @@ inline void write_view_set(const ViewSet& views, const std::filesystem::path& di
       for (int c = 0; c < 3; ++c) encoded.data[p * 4 + c] = 0.5f * (encoded.data[p * 4 + c] + 1.f);
     save_image(encoded, dir / view_file_name(v, true));
   }
-}
-
-// A fresh empty folder under the system temp folder, apart from other test processes' folders.
-inline std::filesystem::path fresh_temp_dir(const std::string& name) {
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("u3d_test_" + name + "_" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir;
 }
 
 }  // namespace u3d::testing

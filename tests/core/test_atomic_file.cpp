@@ -7,6 +7,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/temp_dir.h"
 
 namespace fs = std::filesystem;
 using namespace u3d;
@@ -14,10 +15,7 @@ using namespace u3d;
 namespace {
 
 fs::path fresh_dir(const std::string& name) {
-  fs::path d = fs::temp_directory_path() / ("u3d_test_atomic_" + std::to_string(::getpid())) / name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
+  return u3d::testing::fresh_temp_dir("atomic_" + name);
 }
 
 size_t entries(const fs::path& dir) {

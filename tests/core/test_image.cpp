@@ -8,14 +8,14 @@
 
 #include "core/error.h"
 #include "core/image.h"
+#include "core/temp_dir.h"
 
 namespace fs = std::filesystem;
 using namespace u3d;
 
 namespace {
 fs::path temp_dir() {
-  fs::path d = fs::temp_directory_path() / ("u3d_test_image_" + std::to_string(::getpid()));
-  fs::create_directories(d);
+  static const fs::path d = u3d::testing::fresh_temp_dir("image");
   return d;
 }
 

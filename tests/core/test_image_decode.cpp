@@ -23,6 +23,7 @@
 #include "core/image.h"
 #include "core/image_decode.h"
 #include "core/progress.h"
+#include "core/temp_dir.h"
 
 namespace fs = std::filesystem;
 using namespace u3d;
@@ -231,8 +232,7 @@ TEST(ImageDecode, PngPixelsAreOpenCvsForEveryColourTypeDepthTransparencyAndInter
 // decoder let them): load_image reports the warning as a progress message naming the file, and the error
 // as the Error's reason.
 TEST(ImageDecode, LibpngMessagesComeInTheProjectsWords) {
-  const fs::path dir = fs::temp_directory_path() / ("u3d_test_png_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const fs::path dir = u3d::testing::fresh_temp_dir("png");
   auto write = [&](const std::string& name, const std::string& bytes) {
     std::ofstream(dir / name, std::ios::binary) << bytes;
     return dir / name;
@@ -310,8 +310,7 @@ TEST(ImageDecode, JpegPixelsAreOpenCvsForGrayColourAndCmyk) {
 // A JPEG that ends early is decoded (libjpeg fills the rest in) with a warning; one whose header is
 // corrupt is an error. Neither may print libjpeg's own lines ("Premature end of JPEG file").
 TEST(ImageDecode, LibjpegMessagesComeInTheProjectsWords) {
-  const fs::path dir = fs::temp_directory_path() / ("u3d_test_jpeg_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const fs::path dir = u3d::testing::fresh_temp_dir("jpeg");
   cv::Mat colour(64, 64, CV_8UC3);
   cv::randu(colour, 0, 256);
   std::vector<unsigned char> bytes;

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
+#include "core/temp_dir.h"
 #include "eval/view_perturbation.h"
 
 using namespace u3d;
@@ -39,10 +40,7 @@ Image flat_normal_map(int size, const Vec3f& n) {
 }
 
 fs::path fresh_dir(const std::string& name) {
-  fs::path d = fs::temp_directory_path() / ("u3d_test_perturb_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
+  return u3d::testing::fresh_temp_dir("perturb_" + name);
 }
 
 }  // namespace

@@ -1,25 +1,20 @@
 #pragma once
 // Shared helpers for the mesh I/O tests: a scratch folder per test and small generated meshes.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 #include <string>
 
 #include "core/mesh.h"
+#include "core/temp_dir.h"
 
 namespace u3d::test {
 
 // A fresh empty folder named after the running test.
 inline std::filesystem::path scratch_dir() {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  std::filesystem::path dir = std::filesystem::temp_directory_path() /
-                              ("u3d_test_io_" + std::to_string(::getpid())) /
-                              (std::string(info->test_suite_name()) + "." + info->name());
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir;
+  return u3d::testing::fresh_temp_dir("io_" + std::string(info->test_suite_name()) + "." + info->name());
 }
 
 inline void write_file(const std::filesystem::path& path, const std::string& bytes) {
