@@ -121,9 +121,10 @@ class Decimator {
     const double t = curvature > 0.0 ? std::clamp(-(pv.dot(q.a * dir) + q.b.dot(dir)) / curvature, 0.0, 1.0) : 0.5;
     Vec3d best = pv + t * dir;
     double cost = q.error(best);
-    Eigen::LDLT<Eigen::Matrix3d> solver(q.a);
     const double scale = q.a.trace();
-    if (solver.info() == Eigen::Success && std::abs(q.a.determinant()) > 1e-9 * scale * scale * scale) {
+    if (std::abs(q.a.determinant()) <= 1e-9 * scale * scale * scale) return {best, cost};  // no minimum (flat)
+    Eigen::LDLT<Eigen::Matrix3d> solver(q.a);
+    if (solver.info() == Eigen::Success) {
       const Vec3d optimum = solver.solve(-q.b);
       // Trust it only near the edge: far away it is an artefact of an almost singular quadric.
       const double err = q.error(optimum);
