@@ -162,6 +162,8 @@ TextureBakeReport bake_texture(Mesh& mesh, const ViewSet& views, const ColoringO
   const int size = options.atlas.texture_size;
   const RasterBuffer texels = rasterize_atlas(atlas.mesh, size);
   std::vector<int32_t> covered;
+  const PixelRect& rect = texels.footprint;
+  if (!rect.empty()) covered.reserve(size_t(rect.x1 - rect.x0 + 1) * size_t(rect.y1 - rect.y0 + 1));  // no regrowth
   for (int y = texels.footprint.y0; y <= texels.footprint.y1; ++y)
     for (int x = texels.footprint.x0; x <= texels.footprint.x1; ++x)
       if (texels.covered(size_t(y) * size + x)) covered.push_back(y * size + x);
