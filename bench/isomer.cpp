@@ -69,6 +69,9 @@ void run_one(int resolution) {
     std::printf("         %s profile: render %.2f s, losses %.2f s, backward %.2f s, step %.2f s, remesh %.2f s\n",
                 name, p.render, p.losses, p.backward, p.step, p.remesh);
   }
+  std::printf("         texture: UV atlas %.2f s, baking %.2f s, %d charts, %.1f %% of the texels used\n",
+              result.texture.uv_seconds, result.texture.bake_seconds, result.texture.charts,
+              100.0 * result.texture.texel_efficiency);
   std::fflush(stdout);
 }
 

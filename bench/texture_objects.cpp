@@ -3,7 +3,8 @@
 // `reconstruct` with its defaults: 40k faces, a 2048 texture baked from the views, `eval --given-frame
 // --gt-render-fill 0.9 --views`), printing per object the atlas's charts, its texels used (the share of
 // the texture whose centre a chart triangle covers: the texels baking fills), the UV and baking
-// seconds and the 24-view PSNR and SSIM. Not a Google Benchmark. Usage: bench_texture_objects --help.
+// seconds and the 24-view PSNR and SSIM (renders at --eval-res). Not a Google Benchmark. Usage:
+// bench_texture_objects --help.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
@@ -25,11 +26,14 @@ int main(int argc, char** argv) {
   std::string out_dir = "bench_texture_objects_out";
   std::vector<std::string> only;
   int resolution = 512;
+  int eval_resolution = AppearanceOptions{}.resolution;
   const float fill = 0.9f;
   app.add_option("--objects", objects_dir, "Folder of object folders (each with one mesh file)")->capture_default_str();
   app.add_option("--out", out_dir, "Folder for the rendered views")->capture_default_str();
   app.add_option("--only", only, "Object names to run (default: all)")->delimiter(',');
   app.add_option("--res", resolution, "View resolution")->capture_default_str();
+  app.add_option("--eval-res", eval_resolution, "Resolution of the 24 evaluation renders (2x supersampled)")
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   if (!fs::is_directory(objects_dir)) {
     std::printf("bench_texture_objects: no objects folder at %s: nothing to do (skipped)\n", objects_dir.c_str());
@@ -65,6 +69,7 @@ int main(int argc, char** argv) {
     EvalOptions eval;
     eval.normalize = false;
     eval.gt_render_fill = fill;
+    eval.appearance_options.resolution = eval_resolution;
     const EvalReport report = evaluate_meshes(result.mesh, gt, eval, &views);
     const TextureBakeReport& t = result.texture;
     const int size = ReconstructOptions{}.texture.atlas.texture_size;

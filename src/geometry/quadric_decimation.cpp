@@ -24,12 +24,19 @@ struct Quadric {
   double error(const Vec3d& x) const { return x.dot(a * x) + 2.0 * b.dot(x) + c; }
 };
 
+// An edge in the queue (24 bytes: the queue's sifting is most of the time, and mostly cache misses).
+// The merged vertex's position is computed again when the edge comes up, from the same quadrics and
+// positions, as the versions guarantee.
 struct Candidate {
   double cost;
   int keep, remove;
   int keep_version, remove_version;
-  Vec3d position;
   bool operator>(const Candidate& o) const { return cost > o.cost; }
+};
+
+struct Placement {
+  Vec3d position;
+  double cost;
 };
 
 // Flat regions collapse at no cost and would otherwise gather into fans of hundreds of slivers
@@ -43,6 +50,9 @@ constexpr double kMinAreaRatio = 1e-6;
 class Decimator {
  public:
   explicit Decimator(const Mesh& mesh) : faces_(mesh.faces), face_alive_(mesh.faces.size(), 1) {
+    std::vector<Candidate> queue;
+    queue.reserve(faces_.size() * 3 / 2);  // the edges of a closed mesh: the first candidates
+    heap_ = decltype(heap_)(std::greater<Candidate>(), std::move(queue));
     const size_t nv = mesh.positions.size();
     positions_.reserve(nv);
     for (const Vec3f& p : mesh.positions) positions_.push_back(p.cast<double>());
@@ -96,9 +106,13 @@ class Decimator {
   }
 
  private:
+  void push_candidate(int v, int w) {
+    heap_.push({std::max(place(v, w).cost, 0.0), v, w, version_[v], version_[w]});
+  }
+
   // Cheapest point for the merged vertex: the quadric's minimum when well defined, else the best
   // point on the edge (flat regions make the quadric singular).
-  void push_candidate(int v, int w) {
+  Placement place(int v, int w) const {
     const Quadric q = quadrics_[v] + quadrics_[w];
     const Vec3d& pv = positions_[v];
     const Vec3d& pw = positions_[w];
@@ -107,15 +121,16 @@ class Decimator {
     const double t = curvature > 0.0 ? std::clamp(-(pv.dot(q.a * dir) + q.b.dot(dir)) / curvature, 0.0, 1.0) : 0.5;
     Vec3d best = pv + t * dir;
     double cost = q.error(best);
-    Eigen::LDLT<Eigen::Matrix3d> solver(q.a);
     const double scale = q.a.trace();
-    if (solver.info() == Eigen::Success && std::abs(q.a.determinant()) > 1e-9 * scale * scale * scale) {
+    if (std::abs(q.a.determinant()) <= 1e-9 * scale * scale * scale) return {best, cost};  // no minimum (flat)
+    Eigen::LDLT<Eigen::Matrix3d> solver(q.a);
+    if (solver.info() == Eigen::Success) {
       const Vec3d optimum = solver.solve(-q.b);
       // Trust it only near the edge: far away it is an artefact of an almost singular quadric.
       const double err = q.error(optimum);
       if ((optimum - 0.5 * (pv + pw)).norm() <= dir.norm() && err < cost) best = optimum, cost = err;
     }
-    heap_.push({std::max(cost, 0.0), v, w, version_[v], version_[w], best});
+    return {best, cost};
   }
 
   void live_faces(int v, std::vector<int>& out) {
@@ -182,14 +197,15 @@ class Decimator {
       }
     if (keep_ring_.size() <= 3 && remove_ring_.size() <= 3) return;  // a tetrahedron: keep it whole
     if (keep_ring_.size() + remove_ring_.size() - 4 > kMaxValence) return;  // merged ring: both lose 2
+    const Vec3d position = place(keep, remove).position;
     Vec3d around = Vec3d::Zero();
     for (int f : keep_faces_) around += area_vector(f);
     for (int f : remove_faces_)
       if (!has(faces_[f], keep)) around += area_vector(f);
     for (int f : keep_faces_)
-      if (!has(faces_[f], remove) && !face_survives_move(f, keep, c.position, around)) return;
+      if (!has(faces_[f], remove) && !face_survives_move(f, keep, position, around)) return;
     for (int f : remove_faces_)
-      if (!has(faces_[f], keep) && !face_survives_move(f, remove, c.position, around)) return;
+      if (!has(faces_[f], keep) && !face_survives_move(f, remove, position, around)) return;
 
     for (int f : shared_) face_alive_[f] = 0;
     alive_faces_ -= 2;
@@ -201,7 +217,7 @@ class Decimator {
     }
     vertex_alive_[remove] = 0;
     vertex_faces_[remove].clear();
-    positions_[keep] = c.position;
+    positions_[keep] = position;
     quadrics_[keep] = quadrics_[keep] + quadrics_[remove];
     ++version_[keep];
     live_faces(keep, keep_faces_);

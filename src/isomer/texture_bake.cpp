@@ -135,79 +135,86 @@ TextureBakeReport bake_texture(Mesh& mesh, const ViewSet& views, const ColoringO
   Mesh vertex_colored = mesh;
   report.vertices = color_mesh(vertex_colored, reduced, coloring);
 
-  // Every covered texel's surface point and unit normal (interpolated vertex normals).
-  const int size = options.atlas.texture_size;
-  const RasterBuffer texels = rasterize_atlas(atlas.mesh, size);
-  std::vector<int32_t> covered;
-  for (int y = texels.footprint.y0; y <= texels.footprint.y1; ++y)
-    for (int x = texels.footprint.x0; x <= texels.footprint.x1; ++x)
-      if (texels.covered(size_t(y) * size + x)) covered.push_back(y * size + x);
-  const size_t count = covered.size();
-  const std::vector<Vec3f> normals = vertex_normals(mesh.positions, mesh.faces);
-  const std::vector<Vec3f> face_n = face_normals(mesh.positions, mesh.faces);
-  std::vector<Vec3f> points(count), texel_normals(count), fallback(count);
-#pragma omp parallel for schedule(static)
-  for (long long i = 0; i < (long long)count; ++i) {
-    const int face = texels.face_id[covered[i]];
-    const Vec3i& f = mesh.faces[face];
-    const Vec2f b = texels.bary[covered[i]];
-    const float b0 = 1.f - b.x() - b.y();
-    points[i] = b0 * mesh.positions[f[0]] + b.x() * mesh.positions[f[1]] + b.y() * mesh.positions[f[2]];
-    const Vec3f n = b0 * normals[f[0]] + b.x() * normals[f[1]] + b.y() * normals[f[2]];
-    texel_normals[i] = n.squaredNorm() > 0.f ? Vec3f(n.normalized()) : face_n[face];
-    fallback[i] =
-        b0 * vertex_colored.colors[f[0]] + b.x() * vertex_colored.colors[f[1]] + b.y() * vertex_colored.colors[f[2]];
-  }
-
-  // ExplicitTarget per texel.
-  std::vector<Vec3f> sum(count, Vec3f(0, 0, 0));
-  std::vector<float> weight(count, 0.f);
+  // The views as the texels sample them.
+  struct Sampled {
+    const Image* image;
+    std::vector<uint8_t> mask;
+    Camera cam;
+    Vec3f toward;
+    RasterBuffer depth;
+    float view_weight;
+  };
+  std::vector<Sampled> sampled;
   for (View v : kAllViews) {
     const float view_weight = target.view_weights[size_t(v)];
     if (view_weight <= 0.f) continue;
     const Image& image = views[v].rgb;
     require(image.channels == 4 && image.width > 1 && image.height > 1,
             std::string("texture baking: the ") + view_name(v) + " image must be RGBA");
-    const std::vector<uint8_t> mask = eroded_mask(image, coloring.mask_erosion_px);
     const Camera cam = view_camera(v, image.width);
-    const RasterBuffer depth = rasterize(mesh, view_camera(v, target.raster_resolution));
-    const float to_raster = float(target.raster_resolution) / float(image.width);
-    const float tolerance =
-        options.depth_tolerance_px * 2.f / float(target.raster_resolution);  // the view spans 2 units
-    const Vec3f toward = cam.toward_camera();
-#pragma omp parallel for schedule(static)
-    for (long long i = 0; i < (long long)count; ++i) {
-      const int face = texels.face_id[covered[i]];
-      if (face_n[face].dot(toward) <= target.facing_epsilon) continue;
-      const Vec3f px = cam.to_pixel(points[i]);
-      if (!(px.x() >= 0.f && px.y() >= 0.f && px.x() < float(image.width) && px.y() < float(image.height))) continue;
-      const int rx = std::min(int(px.x() * to_raster), depth.width - 1),
-                ry = std::min(int(px.y() * to_raster), depth.height - 1);
-      const size_t pixel = size_t(ry) * depth.width + rx;
-      if (depth.covered(pixel) && depth.face_id[pixel] != face && px.z() > depth.depth[pixel] + tolerance)
-        continue;  // hidden behind other surface
-      const Vec4f s = sample_view(image, mask, px.x(), px.y());
-      float w = view_weight * s[3];
-      const float c = std::abs(texel_normals[i].dot(toward));
-      for (int k = 0; k < target.cos_power; ++k) w *= c;
-      sum[i] += w * s.head<3>().cwiseMax(0.f).cwiseMin(1.f);
-      weight[i] += w;
-    }
+    sampled.push_back({&image, eroded_mask(image, coloring.mask_erosion_px), cam, cam.toward_camera(),
+                       rasterize(mesh, view_camera(v, target.raster_resolution)), view_weight});
   }
 
-  // Colours: the weighted mean, fading below the threshold toward the vertex colouring.
+  // Each covered texel in one pass: its surface point and unit normal (interpolated vertex normals),
+  // ExplicitTarget over the views, and its colour: the weighted mean, fading below the threshold
+  // toward the vertex colouring.
+  const int size = options.atlas.texture_size;
+  const RasterBuffer texels = rasterize_atlas(atlas.mesh, size);
+  std::vector<int32_t> covered;
+  const PixelRect& rect = texels.footprint;
+  if (!rect.empty()) covered.reserve(size_t(rect.x1 - rect.x0 + 1) * size_t(rect.y1 - rect.y0 + 1));  // no regrowth
+  for (int y = texels.footprint.y0; y <= texels.footprint.y1; ++y)
+    for (int x = texels.footprint.x0; x <= texels.footprint.x1; ++x)
+      if (texels.covered(size_t(y) * size + x)) covered.push_back(y * size + x);
+  const size_t count = covered.size();
+  const std::vector<Vec3f> normals = vertex_normals(mesh.positions, mesh.faces);
+  const std::vector<Vec3f> face_n = face_normals(mesh.positions, mesh.faces);
+  const float tolerance =
+      options.depth_tolerance_px * 2.f / float(target.raster_resolution);  // the view spans 2 units
   Image texture(size, size, 3, 0.f);
   std::vector<uint8_t> set(texels.pixel_count(), 0);
   const float threshold = coloring.confidence_threshold;
   size_t confident = 0;
 #pragma omp parallel for schedule(static) reduction(+ : confident)
   for (long long i = 0; i < (long long)count; ++i) {
+    const int face = texels.face_id[covered[i]];
+    const Vec3i& f = mesh.faces[face];
+    const Vec2f b = texels.bary[covered[i]];
+    const float b0 = 1.f - b.x() - b.y();
+    const Vec3f point = b0 * mesh.positions[f[0]] + b.x() * mesh.positions[f[1]] + b.y() * mesh.positions[f[2]];
+    const Vec3f n = b0 * normals[f[0]] + b.x() * normals[f[1]] + b.y() * normals[f[2]];
+    const Vec3f texel_normal = n.squaredNorm() > 0.f ? Vec3f(n.normalized()) : face_n[face];
+    const Vec3f fallback =
+        b0 * vertex_colored.colors[f[0]] + b.x() * vertex_colored.colors[f[1]] + b.y() * vertex_colored.colors[f[2]];
+    Vec3f sum(0, 0, 0);
+    float weight = 0.f;
+    for (const Sampled& view : sampled) {
+      const Image& image = *view.image;
+      const RasterBuffer& depth = view.depth;
+      const Vec3f& toward = view.toward;
+      if (face_n[face].dot(toward) <= target.facing_epsilon) continue;
+      const Vec3f px = view.cam.to_pixel(point);
+      if (!(px.x() >= 0.f && px.y() >= 0.f && px.x() < float(image.width) && px.y() < float(image.height))) continue;
+      const float to_raster = float(target.raster_resolution) / float(image.width);
+      const int rx = std::min(int(px.x() * to_raster), depth.width - 1),
+                ry = std::min(int(px.y() * to_raster), depth.height - 1);
+      const size_t pixel = size_t(ry) * depth.width + rx;
+      if (depth.covered(pixel) && depth.face_id[pixel] != face && px.z() > depth.depth[pixel] + tolerance)
+        continue;  // hidden behind other surface
+      const Vec4f s = sample_view(image, view.mask, px.x(), px.y());
+      float w = view.view_weight * s[3];
+      const float c = std::abs(texel_normal.dot(toward));
+      for (int k = 0; k < target.cos_power; ++k) w *= c;
+      sum += w * s.head<3>().cwiseMax(0.f).cwiseMin(1.f);
+      weight += w;
+    }
     Vec3f color;
-    if (weight[i] >= threshold && weight[i] > 0.f) {
-      color = sum[i] / weight[i];
+    if (weight >= threshold && weight > 0.f) {
+      color = sum / weight;
       ++confident;
     } else {
-      color = threshold > 0.f ? Vec3f((sum[i] + (threshold - weight[i]) * fallback[i]) / threshold) : fallback[i];
+      color = threshold > 0.f ? Vec3f((sum + (threshold - weight) * fallback) / threshold) : fallback;
     }
     Eigen::Map<Vec3f>(texture.data.data() + size_t(covered[i]) * 3) = color.cwiseMax(0.f).cwiseMin(1.f);
     set[covered[i]] = 1;
