@@ -243,13 +243,13 @@ TEST(ImageDecode, LibpngMessagesComeInTheProjectsWords) {
   const fs::path left = write("left.png", make_png(2, 2, 0, 8, samples, false, text));
 
   Messages messages;
-  testing::internal::CaptureStderr();
+  ::testing::internal::CaptureStderr();
   Image image;
   {
     ProgressScope scope(&messages);
     image = load_image(left);
   }
-  std::string printed = testing::internal::GetCapturedStderr();
+  std::string printed = ::testing::internal::GetCapturedStderr();
   EXPECT_EQ(printed, "");
   ASSERT_EQ(image.channels, 1);
   EXPECT_EQ(image.data[1], 1.f);
@@ -259,26 +259,26 @@ TEST(ImageDecode, LibpngMessagesComeInTheProjectsWords) {
   std::string broken = make_png(2, 2, 0, 8, samples);
   broken[broken.find("IDAT") + 6] ^= 0x40;  // inside the zlib stream, so IDAT's CRC fails
   const fs::path right = write("right.png", broken);
-  testing::internal::CaptureStderr();
+  ::testing::internal::CaptureStderr();
   try {
     load_image(right);
     ADD_FAILURE() << "accepted";
   } catch (const Error& e) {
     EXPECT_EQ(std::string(e.what()), "cannot decode image " + right.string() + ": IDAT: CRC error");
   }
-  printed = testing::internal::GetCapturedStderr();
+  printed = ::testing::internal::GetCapturedStderr();
   EXPECT_EQ(printed, "");
 
   const std::string whole = make_png(2, 2, 0, 8, samples);
   const fs::path cut = write("cut.png", whole.substr(0, whole.size() / 2));
-  testing::internal::CaptureStderr();
+  ::testing::internal::CaptureStderr();
   try {
     load_image(cut);
     ADD_FAILURE() << "accepted";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("cut.png: the data ends early"), std::string::npos) << e.what();
   }
-  printed = testing::internal::GetCapturedStderr();
+  printed = ::testing::internal::GetCapturedStderr();
   EXPECT_EQ(printed, "");
   fs::remove_all(dir);
 }
@@ -320,13 +320,13 @@ TEST(ImageDecode, LibjpegMessagesComeInTheProjectsWords) {
   const fs::path cut = dir / "cut.jpg";
   std::ofstream(cut, std::ios::binary) << jpeg.substr(0, jpeg.size() * 2 / 3);
   Messages messages;
-  testing::internal::CaptureStderr();
+  ::testing::internal::CaptureStderr();
   Image image;
   {
     ProgressScope scope(&messages);
     image = load_image(cut);
   }
-  EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
   EXPECT_EQ(image.width, 64);
   ASSERT_EQ(messages.lines.size(), 1u);
   EXPECT_EQ(messages.lines[0], "warning: image " + cut.string() + ": Premature end of JPEG file");
@@ -338,14 +338,14 @@ TEST(ImageDecode, LibjpegMessagesComeInTheProjectsWords) {
   corrupt[sof + 9] = char(7);     // seven components
   const fs::path bad = dir / "bad.jpg";
   std::ofstream(bad, std::ios::binary) << corrupt;
-  testing::internal::CaptureStderr();
+  ::testing::internal::CaptureStderr();
   try {
     load_image(bad);
     ADD_FAILURE() << "accepted";
   } catch (const Error& e) {
     EXPECT_EQ(std::string(e.what()).rfind("cannot decode image " + bad.string() + ": ", 0), 0u) << e.what();
   }
-  EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
   fs::remove_all(dir);
 }
 

@@ -282,10 +282,10 @@ TEST_F(PthTest, ZipRecordsOutsideTheFileOrOverlappingAreRefused) {
   expect_error(overlap, {"overlap.pth", "corrupt"});
 }
 
-// Archives that break torch.save's layout are refused by the reader's own check of the zip directory,
-// before libtorch opens them (libtorch's reader leaks when it refuses a file; fuzz/lsan.supp): each edit
-// below renames entries of a well-formed archive, in its central directory, its local headers, or both.
-TEST_F(PthTest, ArchivesOutsideTorchSaveLayoutAreRefusedBeforeLibtorchOpensThem) {
+// Archives that break torch.save's layout are refused by the reader's check of the zip directory before
+// any record is read: each edit below renames entries of a well-formed archive, in its central directory,
+// its local headers, or both.
+TEST_F(PthTest, ArchivesOutsideTorchSaveLayoutAreRefused) {
   PickleWriter p;
   p.empty_ordered_dict().mark().str("a").tensor("FloatStorage", "0", 4, 0, {4}, {1});
   p.str("b").tensor("FloatStorage", "1", 4, 0, {4}, {1}).op('u');
@@ -317,8 +317,8 @@ TEST_F(PthTest, ArchivesOutsideTorchSaveLayoutAreRefusedBeforeLibtorchOpensThem)
   expect_error(edited("unversioned", "unversioned/version", "unversioned/vers1on", {}),
                {"unversioned.pth", "without a version record"});
 
-  // A stored record whose directory entry claims 2 GB (found by fuzz_pth: libtorch allocated the claimed
-  // size before reading): stored data is as long as its compressed size.
+  // A stored record whose directory entry claims 2 GB (found by fuzz_pth, when libtorch's zip reader
+  // allocated the claimed size before reading): stored data is as long as its compressed size.
   const fs::path huge = write_pth("huge", p.finish(), records);
   std::string bytes;
   {
@@ -340,7 +340,7 @@ TEST_F(PthTest, TruncatedArchiveNamesTheFile) {
   expect_error(path, {"truncated.pth", "corrupt or truncated"});
 }
 
-// libtorch's zip reader skips CRCs; the reader checks them so a damaged weight is not loaded silently.
+// Every record's CRC is checked, so a damaged weight is not loaded silently.
 TEST_F(PthTest, FlippedByteInAWeightFailsTheCrc) {
   const torch::Tensor w = torch::arange(64, torch::kFloat32);
   PickleWriter p;

@@ -87,7 +87,7 @@ std::map<std::string, ZipRecord> zip_records(const std::filesystem::path& path) 
     }
     if (offset > dir_offset || compressed > dir_offset - offset)
       throw bad("entry " + name + " lies outside the file (truncated download?)");
-    // The size libtorch allocates before reading: stored (torch.save's way) or deflated data cannot hold
+    // The size a deflated record is inflated into: stored (torch.save's way) or deflated data cannot hold
     // more than this, so a larger claim is corrupt and would only allocate memory for nothing.
     const uint64_t method = le(dir, pos + 10, 2);
     if (method != 0 && method != 8) throw bad("entry " + name + " uses compression method " + std::to_string(method));

@@ -19,7 +19,7 @@ struct ZipRecord {
 };
 
 // Every entry of the archive's central directory (zip64 included), keyed by the entry name without its
-// leading top-level folder ("archive/data/0" -> "data/0"), as libtorch's PyTorchStreamReader names
+// leading top-level folder ("archive/data/0" -> "data/0"), as the checkpoint's pickle names
 // records. Reads only the directory, which zip keeps at the end of the file, so a truncated download
 // fails here. Malformed directories, entries outside the first entry's top-level folder (torch.save puts
 // every record in one), two entries of one name and entries whose data would lie outside the file are a
