@@ -80,8 +80,6 @@ python3 -c "import sys, zipfile; z = zipfile.ZipFile(sys.argv[1]); open(sys.argv
 declare -A max_len=([image]=131072 [obj]=65536 [mtl]=4096 [ply]=16384 [gltf]=16384 [config]=16384 [pickle]=65536 [zip]=65536
   [safetensors]=16384 [onnx]=131072 [pth]=16384 [state_dict]=16384)
 
-# Leaks inside libtorch itself are not reported (fuzz/lsan.supp says why).
-export LSAN_OPTIONS="suppressions=$root/fuzz/lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
 # One target: runs it and writes its summary line to $build/logs/<target>.summary ("FAILED" in it when
 # libFuzzer found something).
 fuzz_target() {

@@ -386,6 +386,14 @@ TEST_F(PthTest, StorageProblemsNameTheTensor) {
   absent.empty_ordered_dict().mark().str("lost").tensor("FloatStorage", "9", 1, 0, {1}, {1}).op('u');
   expect_error(write_pth("absent", absent.finish(), {}), {"absent.pth", "lost", "data/9"});
 
+  // One record named by two storages of different sizes (found by fuzz_state_dict): the second view would
+  // need a larger storage than the record.
+  PickleWriter reused;
+  reused.empty_ordered_dict().mark().str("a").tensor("FloatStorage", "0", 4, 0, {4}, {1});
+  reused.str("b").tensor("DoubleStorage", "0", 4, 0, {4}, {1}).op('u');
+  expect_error(write_pth("reused", reused.finish(), {{"0", std::string(16, '\0')}}),
+               {"reused.pth", "'b'", "data/0", "16 and 32 bytes"});
+
   PickleWriter not_tensor;
   not_tensor.empty_ordered_dict().mark().str("epoch").integer(3).op('u');
   expect_error(write_pth("epoch", not_tensor.finish(), {}), {"epoch.pth", "'epoch'", "not a tensor"});

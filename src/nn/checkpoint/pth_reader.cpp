@@ -146,7 +146,9 @@ void check_zip_magic(const std::filesystem::path& path) {
 class RecordReader {
  public:
   explicit RecordReader(const std::filesystem::path& path)
-      : source_(path.string()), records_(checked_records(path)), file_(std::make_shared<MappedFile>(path, "checkpoint")) {}
+      : source_(path.string()),
+        records_(checked_records(path)),
+        file_(std::make_shared<MappedFile>(path, "checkpoint")) {}
 
   bool has(const std::string& name) const { return records_.count(name) > 0; }
   // The record's size from the zip directory, without reading it.
@@ -206,9 +208,15 @@ class StorageCache {
   StorageCache(const RecordReader& reader, std::string source) : reader_(reader), source_(std::move(source)) {}
 
   c10::Storage get(const StorageRef& ref, const std::string& tensor_name) {
-    auto it = cache_.find(ref.key);
-    if (it != cache_.end()) return it->second;
     const std::string record = storage_record(ref);
+    auto it = cache_.find(ref.key);
+    if (it != cache_.end()) {
+      // torch.save names each storage once; a key reused with another size (or type) is a corrupt pickle.
+      require(it->second.nbytes() == storage_bytes(ref),
+              source_ + ": tensor '" + tensor_name + "': record " + record + " is used as storages of " +
+                  std::to_string(it->second.nbytes()) + " and " + std::to_string(storage_bytes(ref)) + " bytes");
+      return it->second;
+    }
     require(reader_.has(record), source_ + ": tensor '" + tensor_name + "': missing record " + record);
     const size_t expected = storage_bytes(ref);
     const std::optional<uint64_t> listed = reader_.record_size(record);
