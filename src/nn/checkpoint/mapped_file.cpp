@@ -12,6 +12,15 @@
 
 namespace u3d::nn {
 
+namespace {
+
+std::uint64_t page_size() {
+  static const auto page = static_cast<std::uint64_t>(::sysconf(_SC_PAGESIZE));
+  return page;
+}
+
+}  // namespace
+
 MappedFile::MappedFile(const std::filesystem::path& path, const char* what) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) throw Error(std::string("cannot open ") + what + " " + path.string() + ": " + std::strerror(errno));
@@ -37,8 +46,7 @@ MappedFile::MappedFile(const std::filesystem::path& path, const char* what) {
 
 void MappedFile::populate(std::uint64_t offset, std::uint64_t bytes) const {
 #ifdef MADV_POPULATE_READ
-  static const auto page = static_cast<std::uint64_t>(::sysconf(_SC_PAGESIZE));
-  const std::uint64_t first = offset / page * page;
+  const std::uint64_t page = page_size(), first = offset / page * page;
   if (bytes > 0) ::madvise(data_ + first, offset + bytes - first, MADV_POPULATE_READ);
 #else
   (void)offset;
@@ -63,7 +71,7 @@ void free_view(void* context) {
   auto* view = static_cast<MappedView*>(context);
   // Only whole pages inside the view: a page shared with a neighbouring view may still be in use (and,
   // written to, be the process's own copy, which MADV_DONTNEED would drop).
-  static const auto page = static_cast<std::uintptr_t>(::sysconf(_SC_PAGESIZE));
+  const std::uintptr_t page = page_size();
   const auto begin = reinterpret_cast<std::uintptr_t>(view->begin);
   const std::uintptr_t first = (begin + page - 1) / page * page, last = (begin + view->bytes) / page * page;
   if (last > first) ::madvise(reinterpret_cast<void*>(first), last - first, MADV_DONTNEED);
