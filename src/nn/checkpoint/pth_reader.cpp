@@ -151,10 +151,16 @@ class RecordReader {
         file_(std::make_shared<MappedFile>(path, "checkpoint")) {}
 
   bool has(const std::string& name) const { return records_.count(name) > 0; }
-  // The record's size from the zip directory, without reading it.
-  std::optional<uint64_t> record_size(const std::string& name) const {
-    auto it = records_.find(name);
-    return it == records_.end() ? std::nullopt : std::optional<uint64_t>(it->second.size);
+  // The record of a tensor's storage, checked to be in the archive and to hold the storage's bytes (from
+  // the zip directory, without reading it).
+  std::string storage_record_of(const StorageRef& ref, const std::string& tensor_name) const {
+    const std::string record = storage_record(ref);
+    auto found = records_.find(record);
+    require(found != records_.end(), source_ + ": tensor '" + tensor_name + "': missing record " + record);
+    require(found->second.size == storage_bytes(ref),
+            source_ + ": tensor '" + tensor_name + "': record " + record + " holds " +
+                std::to_string(found->second.size) + " bytes, its storage needs " + std::to_string(storage_bytes(ref)));
+    return record;
   }
 
   // `user` says what needs the record, for errors ("tensor 'conv.weight'").
@@ -217,13 +223,7 @@ class StorageCache {
                   std::to_string(it->second.nbytes()) + " and " + std::to_string(storage_bytes(ref)) + " bytes");
       return it->second;
     }
-    require(reader_.has(record), source_ + ": tensor '" + tensor_name + "': missing record " + record);
-    const size_t expected = storage_bytes(ref);
-    const std::optional<uint64_t> listed = reader_.record_size(record);
-    require(listed == expected, source_ + ": tensor '" + tensor_name + "': record " + record + " holds " +
-                                    std::to_string(listed.value_or(0)) + " bytes, its storage needs " +
-                                    std::to_string(expected));
-    c10::Storage storage = reader_.read(record, "tensor '" + tensor_name + "'");
+    c10::Storage storage = reader_.read(reader_.storage_record_of(ref, tensor_name), "tensor '" + tensor_name + "'");
     cache_.emplace(ref.key, storage);
     return storage;
   }
@@ -322,12 +322,7 @@ TensorMap inspect_pth(const std::filesystem::path& path) {
   add_entries(
       *root.as<std::shared_ptr<pickle::Dict>>(), "",
       [&](const TensorRef& ref, const std::string& name) {
-        const std::string record = storage_record(*ref.storage);
-        const auto size = reader.record_size(record);
-        require(size.has_value(), source + ": tensor '" + name + "': missing record " + record);
-        require(*size == storage_bytes(*ref.storage),
-                source + ": tensor '" + name + "': record " + record + " holds " + std::to_string(*size) +
-                    " bytes, its storage needs " + std::to_string(storage_bytes(*ref.storage)));
+        reader.storage_record_of(*ref.storage, name);
         return torch::empty(ref.sizes, torch::TensorOptions().dtype(ref.storage->dtype).device(torch::kMeta));
       },
       source, tensors);
