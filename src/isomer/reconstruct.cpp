@@ -1,6 +1,5 @@
 #include "isomer/reconstruct.h"
 
-#include <future>
 #include <map>
 #include <optional>
 
@@ -70,33 +69,24 @@ ReconstructResult reconstruct(const ViewSet& views, const ReconstructOptions& op
   // from the mesh as optimised (fitted meshes are not smoothed: the grid has already done so).
   Mesh smoothed;
   timed("smooth and subdivide", [&] { smoothed = fitted ? mesh : smooth_and_subdivide(mesh, options.cleanup); });
-  const size_t faces = final_face_count(options);
-  // The decimation (one thread, about 1 s for the 283k faces of the bundled example) starts on the
-  // smoothed mesh beside the silhouette fit, which keeps that mesh on most objects (where it replaces
-  // it, that result is dropped). The "decimate" stage is then the wait for it after the fit.
-  std::future<Mesh> decimated;
-  if (faces > 0 && smoothed.faces.size() > faces)
-    decimated = std::async(std::launch::async, [&smoothed, faces] { return decimate_closed_mesh(smoothed, faces); });
   const SilhouetteFitOptions& fit = options.silhouette_fit;
   bool grid_surface = fitted;  // a surface from the fit's grid, which can leave crumbs
-  std::optional<Mesh> fitted_mesh;
   if (fit.enabled && (options.run_coarse || options.run_refine))
-    timed("silhouette fit", [&] { fitted_mesh = fit_optimised_mesh(mesh, smoothed, views, fit); });
-  if (fitted_mesh) {
-    grid_surface = true;
-    if (decimated.valid()) decimated.wait();  // it reads `smoothed`
-    smoothed = std::move(*fitted_mesh);
-    decimated = {};
-  }
-  if (faces > 0 && smoothed.faces.size() > faces)
+    timed("silhouette fit", [&] {
+      if (std::optional<Mesh> fitted_mesh = fit_optimised_mesh(mesh, smoothed, views, fit)) {
+        smoothed = std::move(*fitted_mesh);
+        grid_surface = true;
+      }
+    });
+  mesh = std::move(smoothed);
+  const size_t faces = final_face_count(options);
+  if (faces > 0 && mesh.faces.size() > faces)
     timed("decimate", [&] {
-      mesh = decimated.valid() ? decimated.get() : decimate_closed_mesh(smoothed, faces);
+      mesh = decimate_closed_mesh(mesh, faces);
       if (mesh.faces.size() > faces + faces / 100)
         progress("warning: decimation stopped at " + std::to_string(mesh.faces.size()) + " faces (asked for " +
                  std::to_string(faces) + ")");
     });
-  else
-    mesh = std::move(smoothed);
   // After the decimation: removing pieces first changed the order of its collapses, and on signpost's
   // fit that order left the mesh open.
   if (grid_surface) drop_pieces_no_view_needs(mesh, views);
