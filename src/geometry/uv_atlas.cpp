@@ -154,8 +154,23 @@ bool self_overlaps(const Chart& c, const Mesh& mesh, float scale) {
               x1 = std::min(w - 1, int(std::ceil(std::max({q[0].x(), q[1].x(), q[2].x()})))),
               y0 = std::max(0, int(std::floor(std::min({q[0].y(), q[1].y(), q[2].y()})))),
               y1 = std::min(h - 1, int(std::ceil(std::max({q[0].y(), q[1].y(), q[2].y()}))));
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) {
+    for (int y = y0; y <= y1; ++y) {
+      // Only texels near the triangle's extent within the row's strip [y, y + 1] (its corners there and
+      // where its edges cross the strip's sides), a texel more either side, take the exact test.
+      float lo = INFINITY, hi = -INFINITY;
+      for (int k = 0; k < 3; ++k) {
+        const Vec2f& a = q[k];
+        const Vec2f& b = q[(k + 1) % 3];
+        if (a.y() >= float(y) && a.y() <= float(y + 1)) lo = std::min(lo, a.x()), hi = std::max(hi, a.x());
+        for (const float side : {float(y), float(y + 1)})
+          if ((a.y() - side) * (b.y() - side) < 0.f) {
+            const float x = a.x() + (side - a.y()) * (b.x() - a.x()) / (b.y() - a.y());
+            lo = std::min(lo, x), hi = std::max(hi, x);
+          }
+      }
+      if (!(lo <= hi)) continue;
+      const int first = std::max(x0, int(std::floor(lo)) - 1), last = std::min(x1, int(std::ceil(hi)) + 1);
+      for (int x = first; x <= last; ++x) {
         const Vec2f p(x + 0.5f, y + 0.5f);
         bool inside = true;
         for (int k = 0; k < 3 && inside; ++k) {
@@ -168,6 +183,7 @@ bool self_overlaps(const Chart& c, const Mesh& mesh, float scale) {
         if (cell) return true;
         cell = 1;
       }
+    }
   }
   return false;
 }

@@ -35,7 +35,7 @@ struct TextureBakeReport {
   size_t texels_covered = 0;     // texels whose centre a chart triangle covers: the texels baking fills
   size_t texels_confident = 0;   // of those, texels at or above the threshold
   double uv_seconds = 0.0;       // the atlas
-  double bake_seconds = 0.0;     // vertex colouring, texels, dilation
+  double bake_seconds = 0.0;     // the rest: texels and dilation, and what of the vertex colouring (beside the atlas) outlasts it
 };
 
 // Replaces `mesh` by its atlas mesh (vertices split at chart seams) with UVs and one material whose
