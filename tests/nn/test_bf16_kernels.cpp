@@ -99,26 +99,49 @@ TEST(Bf16Kernels, ConvolutionFollowsWeightsChangedAfterTheFirstCall) {
   EXPECT_LT(relative_error(conv->forward(x).to(torch::kFloat), reference()), 4e-3);
 }
 
-TEST(Bf16Kernels, ConvolutionWithoutKeptWeightsGivesTheSameValues) {
+TEST(Bf16Kernels, ConvolutionPackedInPlaceGivesTheSameValues) {
   U3D_SKIP_UNLESS_BF16_KERNELS();
   torch::NoGradGuard no_grad;
   torch::manual_seed(18);
-  torch::nn::Sequential model(Conv2d(16, 32, 3, 1, 1, true, torch::TensorOptions()),
-                              Conv2d(32, 32, 3, 1, 1, false, torch::TensorOptions()));
-  randomize_parameters(*model, 0.2);
-  set_precision(*model, Precision::kBf16);
+  // 16 and 32 channels: the packed layouts fit in the weights' own bytes. 3 input channels: they do not.
+  const auto make = [] {
+    torch::nn::Sequential model(Conv2d(16, 32, 3, 1, 1, true, torch::TensorOptions()),
+                                Conv2d(32, 32, 3, 1, 1, false, torch::TensorOptions()),
+                                Conv2d(32, 3, 1, 1, 0, true, torch::TensorOptions()),
+                                Conv2d(3, 16, 3, 1, 1, true, torch::TensorOptions()));
+    return model;
+  };
+  torch::nn::Sequential separate = make(), in_place = make();
+  randomize_parameters(*separate, 0.2);
+  set_precision(*separate, Precision::kBf16);
+  set_precision(*in_place, Precision::kBf16);
+  const auto weight = [](torch::nn::Sequential& m, size_t i) { return m[i]->as<Conv2dImpl>()->weight; };
+  for (size_t i = 0; i < separate->size(); ++i) {
+    weight(in_place, i).copy_(weight(separate, i));
+    if (const torch::Tensor bias = separate[i]->as<Conv2dImpl>()->bias; bias.defined())
+      in_place[i]->as<Conv2dImpl>()->bias.copy_(bias);
+  }
+  pack_conv_weights_in_place(*in_place);
+  const void* storage = weight(in_place, 0).data_ptr();
+
   const torch::Tensor x = torch::randn({2, 16, 8, 8}).to(torch::kBFloat16);
-  const torch::Tensor kept = model->forward(x);
-  keep_packed_conv_weights(*model, false);
-  // The same kernel on weights reordered for each call: the same values.
-  EXPECT_TRUE(torch::equal(model->forward(x), kept));
-  // Weights changed in place are read again on the next call.
-  auto* first = model[0]->as<Conv2dImpl>();
-  first->weight.neg_();
-  const torch::Tensor changed = model->forward(x);
-  keep_packed_conv_weights(*model, true);
-  EXPECT_TRUE(torch::equal(model->forward(x), changed));
-  EXPECT_FALSE(torch::equal(changed, kept));
+  const torch::Tensor expected = separate->forward(x);
+  // The same kernels on the same packed values: the same result, and again on the next call.
+  EXPECT_TRUE(torch::equal(in_place->forward(x), expected));
+  EXPECT_TRUE(torch::equal(in_place->forward(x), expected));
+  // The first two layers' weights now hold the packed layout in their own storage; the others kept theirs.
+  EXPECT_EQ(weight(in_place, 0).data_ptr(), storage);
+  EXPECT_FALSE(torch::equal(weight(in_place, 0), weight(separate, 0)));
+  EXPECT_FALSE(torch::equal(weight(in_place, 1), weight(separate, 1)));
+  EXPECT_TRUE(torch::equal(weight(in_place, 3), weight(separate, 3)));
+  // Another input size gets its own plan from the packed values.
+  const torch::Tensor larger = torch::randn({1, 16, 11, 5}).to(torch::kBFloat16);
+  EXPECT_TRUE(torch::equal(in_place->forward(larger), separate->forward(larger)));
+  // New values copied in (as a weight loader does) are packed again.
+  weight(in_place, 0).copy_(weight(separate, 0).neg());
+  weight(separate, 0).neg_();
+  EXPECT_TRUE(torch::equal(in_place->forward(x), separate->forward(x)));
+  EXPECT_FALSE(torch::equal(separate->forward(x), expected));
 }
 
 TEST(Bf16Kernels, ConvolutionRejectsAChannelMismatch) {

@@ -27,11 +27,11 @@ torch::Tensor Conv2dImpl::forward(const torch::Tensor& x) {
   return torch::conv2d(x, weight, bias, {stride, stride}, {padding, padding});
 }
 
-void Conv2dImpl::keep_packed_weights(bool keep) { onednn_->keep_packed_weights(keep); }
+void Conv2dImpl::pack_weights_in_place() { onednn_->pack_in_place(); }
 
-void keep_packed_conv_weights(torch::nn::Module& model, bool keep) {
+void pack_conv_weights_in_place(torch::nn::Module& model) {
   for (const auto& module : model.modules(/*include_self=*/true))
-    if (auto* conv = dynamic_cast<Conv2dImpl*>(module.get())) conv->keep_packed_weights(keep);
+    if (auto* conv = dynamic_cast<Conv2dImpl*>(module.get())) conv->pack_weights_in_place();
 }
 
 GroupNormImpl::GroupNormImpl(int64_t groups_, int64_t channels, double eps_, const torch::TensorOptions& options)

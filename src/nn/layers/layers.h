@@ -24,8 +24,8 @@ class Conv2dImpl : public torch::nn::Module {
   Conv2dImpl(int64_t in_channels, int64_t out_channels, int64_t kernel, int64_t stride, int64_t padding, bool bias,
              const torch::TensorOptions& options);
   torch::Tensor forward(const torch::Tensor& x);
-  // bf16 on the CPU: whether the packed weights stay between calls (OnednnConv2d::keep_packed_weights).
-  void keep_packed_weights(bool keep);
+  // bf16 on the CPU: pack the weights into their own storage (OnednnConv2d::pack_in_place).
+  void pack_weights_in_place();
   torch::Tensor weight, bias;
   int64_t stride, padding;
 
@@ -35,8 +35,9 @@ class Conv2dImpl : public torch::nn::Module {
 };
 TORCH_MODULE(Conv2d);
 
-// keep_packed_weights(keep) on every Conv2d inside `model`.
-void keep_packed_conv_weights(torch::nn::Module& model, bool keep);
+// pack_weights_in_place() on every Conv2d inside `model`: for a loaded network that only serves forward
+// passes (OnednnConv2d::pack_in_place says what that gives up).
+void pack_conv_weights_in_place(torch::nn::Module& model);
 
 // The norms compute in the dtype of their weights: fp32 weights normalise bf16/fp16 activations in
 // fp32 and return the activations' dtype (nn/precision.h).

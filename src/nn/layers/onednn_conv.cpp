@@ -4,6 +4,7 @@
 #include "nn/precision.h"
 
 #include <array>
+#include <cstring>
 #include <mutex>
 #include <string>
 #include <unordered_map>
@@ -35,10 +36,12 @@ struct OnednnConv2d::State {
     dnnl::memory weights;
   };
   std::mutex mutex;
-  bool keep_packed = true;
+  bool pack_in_place = false;
   WeightKey key;
   std::vector<Plan> plans;
   std::vector<Packed> packed;
+  // packed[0] is the weight tensor's own storage, in packed[0].desc's layout (pack_in_place).
+  bool packed_in_place = false;
 
   const Plan& plan_for(const torch::Tensor& x, const torch::Tensor& weight, const torch::Tensor& bias, int64_t stride,
                        int64_t padding) {
@@ -46,6 +49,7 @@ struct OnednnConv2d::State {
     if (!(current == key)) {
       plans.clear();
       packed.clear();
+      packed_in_place = false;
       key = current;
     }
     const std::array<int64_t, 3> input{x.size(0), x.size(2), x.size(3)};
@@ -82,23 +86,36 @@ struct OnednnConv2d::State {
     }
     size_t index = 0;
     while (index < packed.size() && packed[index].desc != pd.weights_desc()) ++index;
-    if (keep_packed && index == packed.size()) {
-      dnnl::memory target(pd.weights_desc(), onednn_cpu_engine());
-      reorder_weights(weight, target);
-      packed.push_back({pd.weights_desc(), target});
-    }
+    if (index == packed.size()) packed.push_back(pack(weight, pd.weights_desc()));
     plans.push_back({input, pd, dnnl::convolution_forward(pd), index, output});
     return plans.back();
   }
 
-  // The plain [out, in, kh, kw] weights into `target`'s layout.
-  static void reorder_weights(const torch::Tensor& weight, dnnl::memory& target) {
-    const torch::Tensor plain = weight.contiguous();
-    dnnl::memory source({{weight.size(0), weight.size(1), weight.size(2), weight.size(3)}, DataType::bf16, Tag::oihw},
-                        onednn_cpu_engine(), plain.data_ptr());
+  // The weights in `desc`'s layout: in the weight tensor's own storage the first time where pack_in_place
+  // asks for it and the layout fits, else a new copy (reordered from the packed storage once the plain
+  // values are gone).
+  Packed pack(const torch::Tensor& weight, const dnnl::memory::desc& desc) {
+    const torch::Tensor plain = packed_in_place ? torch::Tensor() : weight.contiguous();
+    dnnl::memory source =
+        packed_in_place ? packed.front().weights
+                        : dnnl::memory({{weight.size(0), weight.size(1), weight.size(2), weight.size(3)},
+                                        DataType::bf16, Tag::oihw},
+                                       onednn_cpu_engine(), plain.data_ptr());
+    const bool in_place =
+        pack_in_place && packed.empty() && weight.is_contiguous() && desc.get_size() <= weight.nbytes();
+    // In place: through a buffer from libtorch's allocator (a reorder cannot write over its source).
+    torch::Tensor buffer;
+    dnnl::memory target = in_place ? dnnl::memory(desc, onednn_cpu_engine(),
+                                                  (buffer = torch::empty({int64_t(desc.get_size())}, torch::kUInt8))
+                                                      .data_ptr())
+                                   : dnnl::memory(desc, onednn_cpu_engine());
     dnnl::stream stream(onednn_cpu_engine());
     dnnl::reorder(source, target).execute(stream, source, target);
     stream.wait();
+    if (!in_place) return {desc, target};
+    std::memcpy(weight.data_ptr(), buffer.data_ptr(), desc.get_size());
+    packed_in_place = true;
+    return {desc, dnnl::memory(desc, onednn_cpu_engine(), weight.data_ptr())};
   }
 };
 
@@ -110,11 +127,9 @@ bool OnednnConv2d::applies(const torch::Tensor& x, const torch::Tensor& weight) 
 OnednnConv2d::OnednnConv2d() : state_(std::make_unique<State>()) {}
 OnednnConv2d::~OnednnConv2d() = default;
 
-void OnednnConv2d::keep_packed_weights(bool keep) {
+void OnednnConv2d::pack_in_place() {
   std::lock_guard<std::mutex> lock(state_->mutex);
-  state_->keep_packed = keep;
-  state_->plans.clear();
-  state_->packed.clear();
+  state_->pack_in_place = true;
 }
 
 torch::Tensor OnednnConv2d::forward(const torch::Tensor& x, const torch::Tensor& weight, const torch::Tensor& bias,
@@ -131,17 +146,7 @@ torch::Tensor OnednnConv2d::forward(const torch::Tensor& x, const torch::Tensor&
   const auto& pd = plan.pd;
   dnnl::memory src(pd.src_desc(), onednn_cpu_engine(), input.data_ptr());
   dnnl::memory dst(pd.dst_desc(), onednn_cpu_engine(), out.data_ptr());
-  // Without kept weights: reordered for this call into a buffer that is freed after it.
-  torch::Tensor weight_buffer;
-  dnnl::memory weights;
-  if (state_->keep_packed) {
-    weights = state_->packed[plan.packed].weights;
-  } else {
-    weight_buffer =
-        torch::empty({static_cast<int64_t>(pd.weights_desc().get_size())}, torch::TensorOptions().dtype(torch::kUInt8));
-    weights = dnnl::memory(pd.weights_desc(), onednn_cpu_engine(), weight_buffer.data_ptr());
-    State::reorder_weights(weight, weights);
-  }
+  const dnnl::memory& weights = state_->packed[plan.packed].weights;
   std::unordered_map<int, dnnl::memory> args{{DNNL_ARG_SRC, src}, {DNNL_ARG_WEIGHTS, weights}, {DNNL_ARG_DST, dst}};
   const torch::Tensor bias_c = bias.defined() ? bias.contiguous() : bias;
   if (bias_c.defined())

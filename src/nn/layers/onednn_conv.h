@@ -28,10 +28,14 @@ class OnednnConv2d {
   torch::Tensor forward(const torch::Tensor& x, const torch::Tensor& weight, const torch::Tensor& bias, int64_t stride,
                         int64_t padding);
 
-  // Whether the packed weights are kept between calls (the default). Without, every call reorders the
-  // weights into a buffer from libtorch's allocator: slower, but no second copy of the weights stays
-  // resident (the reference UNet of the normal stage, docs/networks.md "bf16 kernels").
-  void keep_packed_weights(bool keep);
+  // From now on the weights are packed into the weight tensor's own storage (where the packed layout fits
+  // in its bytes, as it does for channel counts that are multiples of 16) instead of into a second
+  // copy: no memory beyond the checkpoint's, and no reorder on any later call. The tensor then holds
+  // oneDNN's layout, not the checkpoint's values, so only a model that serves forward passes and is
+  // not read or converted afterwards may do this (the pipelines' loaded networks, docs/networks.md
+  // "bf16 kernels"). Replacing or modifying the tensor afterwards (set_data, copy_) packs the new
+  // values again.
+  void pack_in_place();
 
  private:
   struct State;

@@ -11,9 +11,6 @@ ReferenceUNet::ReferenceUNet(const UNetConfig& config, const torch::TensorOption
     : unet(config, options), reference(config, options), store(std::make_shared<ReferenceStore>()) {
   install_reference_attention(*unet, *reference, store, options);
   unet->register_module("ref_unet", reference.ptr());
-  // In bf16 the packed convolution weights of both UNets (about 1 GB each) put the normal stage over
-  // 6 GB; the reference UNet reorders its weights on every call instead (docs/networks.md, "bf16 kernels").
-  keep_packed_conv_weights(*reference, false);
 }
 
 namespace {

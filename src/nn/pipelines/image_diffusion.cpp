@@ -7,6 +7,7 @@
 #include "core/progress.h"
 #include "nn/checkpoint/config_json.h"
 #include "nn/checkpoint/state_dict_loader.h"
+#include "nn/layers/layers.h"
 #include "nn/pipelines/guidance.h"
 #include "nn/schedulers/scheduler_config.h"
 #include "nn/preprocess/pil_resize.h"
@@ -68,6 +69,7 @@ ConditioningModels load_conditioning_models(const DiffusersFolder& folder, Preci
                         reader.options());
   allocate_in_precision(*m.vae, precision);
   reader.load(*m.vae, vae_weights);
+  pack_conv_weights_in_place(*m.vae);
   return m;
 }
 

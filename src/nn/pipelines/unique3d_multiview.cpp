@@ -4,6 +4,7 @@
 #include "nn/checkpoint/config_json.h"
 #include "nn/checkpoint/diffusers_folder.h"
 #include "nn/checkpoint/state_dict_loader.h"
+#include "nn/layers/layers.h"
 #include "nn/layers/multiview_attention.h"
 
 namespace u3d::nn {
@@ -37,6 +38,7 @@ std::unique_ptr<MultiViewModel> MultiViewModel::load(const std::filesystem::path
   m->unet = UNet2DConditionModel(config, reader.options());
   allocate_in_precision(*m->unet, precision);
   reader.load(*m->unet, unet_weights);
+  pack_conv_weights_in_place(*m->unet);
   set_attention_processors(*m->unet, self_attention_only(std::make_shared<MultiViewAttentionProcessor>(kViews)));
   return m;
 }

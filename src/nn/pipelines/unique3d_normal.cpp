@@ -4,6 +4,7 @@
 #include "nn/checkpoint/config_json.h"
 #include "nn/checkpoint/diffusers_folder.h"
 #include "nn/checkpoint/state_dict_loader.h"
+#include "nn/layers/layers.h"
 
 namespace u3d::nn {
 
@@ -36,6 +37,7 @@ std::unique_ptr<ReferenceUNet> load_reference_unet(const DiffusersFolder& base, 
     reader.load(*unet->reference, base_unet_weights);
   else
     reader.apply(*unet->reference, std::move(reference), {}, unet_weights.string() + " (" + kRefUnetPrefix + "*)");
+  pack_conv_weights_in_place(*unet->unet);  // the reference UNet is registered inside it
   return unet;
 }
 

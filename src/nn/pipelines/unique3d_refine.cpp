@@ -9,6 +9,7 @@
 #include "nn/checkpoint/config_json.h"
 #include "nn/checkpoint/diffusers_folder.h"
 #include "nn/checkpoint/state_dict_loader.h"
+#include "nn/layers/layers.h"
 #include "nn/pipelines/image_diffusion.h"
 #include "nn/preprocess/pil_resize.h"
 #include "nn/schedulers/scheduler_config.h"
@@ -98,6 +99,7 @@ std::unique_ptr<RefineEncoders> RefineEncoders::load(const RefineCheckpoints& c,
   m->vae = AutoencoderKL(AutoencoderKLConfig::from_json(read_json_file(f.vae_config), f.vae_config.string()), cpu);
   allocate_in_precision(*m->vae, precision);
   reader.load(*m->vae, f.vae_weights);
+  pack_conv_weights_in_place(*m->vae);
   return m;
 }
 
@@ -159,12 +161,14 @@ std::unique_ptr<RefineModel> RefineModel::load(const RefineCheckpoints& c, Preci
   m->unet = UNet2DConditionModel(UNetConfig::from_json(read_json_file(f.unet_config), f.unet_config.string()), cpu);
   allocate_in_precision(*m->unet, precision);
   reader.load(*m->unet, f.unet_weights);
+  pack_conv_weights_in_place(*m->unet);
   m->ip_adapter = load_ip_adapter(*m->unet, f.adapter_weights, 1.0, reader);
   set_precision(*m->ip_adapter, precision);  // built to the file's sizes as it is read
   m->controlnet = ControlNetModel(
       ControlNetConfig::from_json(read_json_file(f.controlnet_config), f.controlnet_config.string()), cpu);
   allocate_in_precision(*m->controlnet, precision);
   reader.load(*m->controlnet, f.controlnet_weights);
+  pack_conv_weights_in_place(*m->controlnet);
   m->vae = AutoencoderKL(AutoencoderKLConfig::from_json(read_json_file(f.vae_config), f.vae_config.string()), cpu);
   allocate_in_precision(*m->vae, precision);
   reader.load(*m->vae, f.vae_weights);
