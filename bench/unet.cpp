@@ -4,7 +4,8 @@
 //   --dtype=fp32|bf16   precision of the model (nn/precision.h); without it both run, each in a child
 //                       process (bf16 only on CPUs with avx512_bf16)
 //   --check             build in fp32, keep each case's fp32 output, convert, and report rel_err_vs_fp32
-//                       (||out - fp32|| / ||fp32||); peak RSS then includes the fp32 model
+//                       (||out - fp32|| / ||fp32||); peak RSS then includes the fp32 model, and the
+//                       convolution weights are not packed in place (a second copy, docs/networks.md)
 //   --profile=FILE      write a Chrome trace of the ATen ops of the timed forwards
 // bench/unet_reference.py times the same cases with diffusers for comparison.
 // fp32 linear layers run in oneDNN on CPUs with AVX-512 (nn/layers/onednn_linear.h); other fp32 matrix
@@ -67,6 +68,7 @@ UNet2DConditionModel& full_size_unet(std::map<int64_t, Case>& cases) {
     if (!g_check) {
       UNet2DConditionModel m = build_unet(scalar_type(g_precision));
       set_precision(*m, g_precision);
+      pack_conv_weights_in_place(*m);  // as the pipelines' loaders do: the weights held once
       return m;
     }
     UNet2DConditionModel m = build_unet(torch::kFloat);

@@ -27,19 +27,29 @@ U3D_INLINE f32x16 silu(f32x16 x) {
   return x * ((x >= 0.0f ? splat(1.0f) : e) / (1.0f + e));
 }
 
-U3D_VECTOR_CLONES void add_pixels(const uint16_t* x, int64_t pixels, int64_t channels, float* sums) {
+// Element access for the two input types: bf16 (as its 16 bits) and fp32.
+U3D_INLINE float to_float(uint16_t v) { return bf16_to_float(v); }
+U3D_INLINE float to_float(float v) { return v; }
+U3D_INLINE f32x16 load_values(const uint16_t* p) { return load_bf16(p); }
+U3D_INLINE f32x16 load_values(const float* p) { return load(p); }
+U3D_INLINE void store_values(uint16_t* p, f32x16 v) { store_bf16(p, v); }
+U3D_INLINE void store_values(float* p, f32x16 v) { store(p, v); }
+
+template <class T>
+U3D_INLINE void add_pixels_of(const T* x, int64_t pixels, int64_t channels, float* sums) {
   for (int64_t p = 0; p < pixels; ++p) {
-    const uint16_t* row = x + p * channels;
-    for (int64_t c = 0; c < channels; ++c) sums[c] += bf16_to_float(row[c]);
+    const T* row = x + p * channels;
+    for (int64_t c = 0; c < channels; ++c) sums[c] += to_float(row[c]);
   }
 }
 
-U3D_VECTOR_CLONES void add_squared_deviations(const uint16_t* x, int64_t pixels, int64_t channels, const float* mean,
-                                              float* sums) {
+template <class T>
+U3D_INLINE void add_squared_deviations_of(const T* x, int64_t pixels, int64_t channels, const float* mean,
+                                          float* sums) {
   for (int64_t p = 0; p < pixels; ++p) {
-    const uint16_t* row = x + p * channels;
+    const T* row = x + p * channels;
     for (int64_t c = 0; c < channels; ++c) {
-      const float d = bf16_to_float(row[c]) - mean[c];
+      const float d = to_float(row[c]) - mean[c];
       sums[c] += d * d;
     }
   }
@@ -47,49 +57,57 @@ U3D_VECTOR_CLONES void add_squared_deviations(const uint16_t* x, int64_t pixels,
 
 // y = x * scale + shift per channel, then SiLU if asked; 16 channels at a time, the last ones of a pixel
 // through a padded copy.
-U3D_VECTOR_CLONES void scale_pixels(const uint16_t* x, int64_t pixels, int64_t channels, const float* scale,
-                                    const float* shift, bool apply_silu, uint16_t* y) {
-  const auto compute = [&](f32x16 v, int64_t c) {
-    v = v * load(scale + c) + load(shift + c);
+template <class T>
+U3D_INLINE void scale_pixels_of(const T* x, int64_t pixels, int64_t channels, const float* scale, const float* shift,
+                                bool apply_silu, T* y) {
+  const auto compute = [&](f32x16 v, const float* s, const float* t) {
+    v = v * load(s) + load(t);
     return apply_silu ? silu(v) : v;
   };
   const int64_t full = channels / kWidth * kWidth;
   for (int64_t p = 0; p < pixels; ++p) {
-    const uint16_t* in = x + p * channels;
-    uint16_t* out = y + p * channels;
-    for (int64_t c = 0; c < full; c += kWidth) store_bf16(out + c, compute(load_bf16(in + c), c));
+    const T* in = x + p * channels;
+    T* out = y + p * channels;
+    for (int64_t c = 0; c < full; c += kWidth)
+      store_values(out + c, compute(load_values(in + c), scale + c, shift + c));
     if (full < channels) {
-      uint16_t values[kWidth] = {}, rounded[kWidth];
+      T values[kWidth] = {}, results[kWidth];
       float s[kWidth] = {}, t[kWidth] = {};
       std::copy(in + full, in + channels, values);
       std::copy(scale + full, scale + channels, s);
       std::copy(shift + full, shift + channels, t);
-      f32x16 v = load_bf16(values) * load(s) + load(t);
-      store_bf16(rounded, apply_silu ? silu(v) : v);
-      std::copy(rounded, rounded + (channels - full), out + full);
+      store_values(results, compute(load_values(values), s, t));
+      std::copy(results, results + (channels - full), out + full);
     }
   }
 }
 
-}  // namespace
+// One copy per instruction set of each kernel and input type (target_clones on plain functions).
+#define U3D_GROUP_NORM_KERNELS(T)                                                                                \
+  U3D_VECTOR_CLONES void add_pixels(const T* x, int64_t pixels, int64_t channels, float* sums) {                 \
+    add_pixels_of(x, pixels, channels, sums);                                                                    \
+  }                                                                                                              \
+  U3D_VECTOR_CLONES void add_squared_deviations(const T* x, int64_t pixels, int64_t channels, const float* mean, \
+                                                float* sums) {                                                   \
+    add_squared_deviations_of(x, pixels, channels, mean, sums);                                                  \
+  }                                                                                                              \
+  U3D_VECTOR_CLONES void scale_pixels(const T* x, int64_t pixels, int64_t channels, const float* scale,          \
+                                      const float* shift, bool apply_silu, T* y) {                               \
+    scale_pixels_of(x, pixels, channels, scale, shift, apply_silu, y);                                           \
+  }
+U3D_GROUP_NORM_KERNELS(uint16_t)
+U3D_GROUP_NORM_KERNELS(float)
+#undef U3D_GROUP_NORM_KERNELS
 
-bool group_norm_channels_last_applies(const torch::Tensor& x, const torch::Tensor& weight) {
-  return x.device().is_cpu() && x.scalar_type() == torch::kBFloat16 && x.dim() == 4 &&
-         x.is_contiguous(at::MemoryFormat::ChannelsLast) && weight.scalar_type() == torch::kFloat &&
-         weight.device().is_cpu() && weight.numel() == x.size(1);
-}
-
-torch::Tensor group_norm_channels_last(const torch::Tensor& x, int64_t groups, const torch::Tensor& weight,
-                                       const torch::Tensor& bias, double eps, bool silu) {
-  TORCH_CHECK(group_norm_channels_last_applies(x, weight), "group_norm_channels_last: not a channels-last bf16 input");
+template <class T>
+torch::Tensor group_norm_of(const torch::Tensor& x, int64_t groups, const torch::Tensor& weight,
+                            const torch::Tensor& bias, double eps, bool silu) {
   const int64_t batch = x.size(0), channels = x.size(1), pixels = x.size(2) * x.size(3);
-  TORCH_CHECK(groups > 0 && channels % groups == 0, "GroupNorm: ", channels, " channels do not split into ", groups,
-              " groups");
   const int64_t per_group = channels / groups;
   const int64_t blocks = std::max<int64_t>((pixels + kBlockPixels - 1) / kBlockPixels, 1);
-  const auto* in = reinterpret_cast<const uint16_t*>(x.data_ptr());
+  const auto* in = reinterpret_cast<const T*>(x.data_ptr());
   torch::Tensor y = torch::empty_like(x);
-  auto* out = reinterpret_cast<uint16_t*>(y.data_ptr());
+  auto* out = reinterpret_cast<T*>(y.data_ptr());
   const torch::Tensor w = weight.contiguous(), b = bias.contiguous();
   const float* gamma = w.data_ptr<float>();
   const float* beta = b.data_ptr<float>();
@@ -115,8 +133,7 @@ torch::Tensor group_norm_channels_last(const torch::Tensor& x, int64_t groups, c
   };
 
   std::fill(partial.begin(), partial.end(), 0.0f);
-  for_each_block(
-      [&](int64_t, const uint16_t* src, int64_t count, float* sums) { add_pixels(src, count, channels, sums); });
+  for_each_block([&](int64_t, const T* src, int64_t count, float* sums) { add_pixels(src, count, channels, sums); });
   const double count = static_cast<double>(pixels * per_group);
   std::vector<float> mean(static_cast<size_t>(batch * channels));
   std::vector<double> totals(static_cast<size_t>(groups));
@@ -127,7 +144,7 @@ torch::Tensor group_norm_channels_last(const torch::Tensor& x, int64_t groups, c
 
   // The variance from the deviations (two passes), not from E[x^2] - mean^2.
   std::fill(partial.begin(), partial.end(), 0.0f);
-  for_each_block([&](int64_t n, const uint16_t* src, int64_t count_pixels, float* sums) {
+  for_each_block([&](int64_t n, const T* src, int64_t count_pixels, float* sums) {
     add_squared_deviations(src, count_pixels, channels, mean.data() + n * channels, sums);
   });
   std::vector<float> scale(static_cast<size_t>(batch * channels)), shift(scale.size());
@@ -141,11 +158,29 @@ torch::Tensor group_norm_channels_last(const torch::Tensor& x, int64_t groups, c
     }
   }
 
-  for_each_block([&](int64_t n, const uint16_t* src, int64_t count_pixels, float*) {
+  for_each_block([&](int64_t n, const T* src, int64_t count_pixels, float*) {
     scale_pixels(src, count_pixels, channels, scale.data() + n * channels, shift.data() + n * channels, silu,
                  out + (src - in));
   });
   return y;
+}
+
+}  // namespace
+
+bool group_norm_channels_last_applies(const torch::Tensor& x, const torch::Tensor& weight) {
+  return x.device().is_cpu() && (x.scalar_type() == torch::kBFloat16 || x.scalar_type() == torch::kFloat) &&
+         x.dim() == 4 && x.is_contiguous(at::MemoryFormat::ChannelsLast) && weight.scalar_type() == torch::kFloat &&
+         weight.device().is_cpu() && weight.numel() == x.size(1);
+}
+
+torch::Tensor group_norm_channels_last(const torch::Tensor& x, int64_t groups, const torch::Tensor& weight,
+                                       const torch::Tensor& bias, double eps, bool silu) {
+  TORCH_CHECK(group_norm_channels_last_applies(x, weight),
+              "group_norm_channels_last: not a channels-last bf16 or fp32 input");
+  TORCH_CHECK(groups > 0 && x.size(1) % groups == 0, "GroupNorm: ", x.size(1), " channels do not split into ", groups,
+              " groups");
+  return x.scalar_type() == torch::kBFloat16 ? group_norm_of<uint16_t>(x, groups, weight, bias, eps, silu)
+                                             : group_norm_of<float>(x, groups, weight, bias, eps, silu);
 }
 
 }  // namespace u3d::nn

@@ -24,13 +24,13 @@ class Conv2dImpl : public torch::nn::Module {
   Conv2dImpl(int64_t in_channels, int64_t out_channels, int64_t kernel, int64_t stride, int64_t padding, bool bias,
              const torch::TensorOptions& options);
   torch::Tensor forward(const torch::Tensor& x);
-  // bf16 on the CPU: pack the weights into their own storage (OnednnConv2d::pack_in_place).
+  // bf16 or fp32 on the CPU: pack the weights into their own storage (OnednnConv2d::pack_in_place).
   void pack_weights_in_place();
   torch::Tensor weight, bias;
   int64_t stride, padding;
 
  private:
-  // bf16 on the CPU: oneDNN directly, with the weights packed once (nn/layers/onednn_conv.h).
+  // bf16 or fp32 on the CPU: oneDNN directly, with the weights packed once (nn/layers/onednn_conv.h).
   std::shared_ptr<OnednnConv2d> onednn_ = std::make_shared<OnednnConv2d>();
 };
 TORCH_MODULE(Conv2d);

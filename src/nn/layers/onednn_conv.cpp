@@ -21,6 +21,10 @@ using DataType = dnnl::memory::data_type;
 // Output sizes (height x width) up to which the direct kernel is taken over oneDNN's first choice.
 constexpr int64_t kSmallOutput = 16;
 
+DataType dnnl_type(const torch::Tensor& t) {
+  return t.scalar_type() == torch::kBFloat16 ? DataType::bf16 : DataType::f32;
+}
+
 }  // namespace
 
 struct OnednnConv2d::State {
@@ -61,26 +65,28 @@ struct OnednnConv2d::State {
     const Dims weight_dims{weight.size(0), weight.size(1), kernel_h, kernel_w};
     const Dims output{x.size(0), weight.size(0), (x.size(2) + 2 * padding - kernel_h) / stride + 1,
                       (x.size(3) + 2 * padding - kernel_w) / stride + 1};
-    const dnnl::memory::desc src(src_dims, DataType::bf16, Tag::nhwc);
-    const dnnl::memory::desc dst(output, DataType::bf16, Tag::nhwc);
-    const dnnl::memory::desc weights_any(weight_dims, DataType::bf16, Tag::any);
+    const DataType type = dnnl_type(weight);
+    const dnnl::memory::desc src(src_dims, type, Tag::nhwc);
+    const dnnl::memory::desc dst(output, type, Tag::nhwc);
+    const dnnl::memory::desc weights_any(weight_dims, type, Tag::any);
     const Dims strides{stride, stride}, pad{padding, padding};
     const auto descriptor =
         bias.defined()
             ? dnnl::convolution_forward::desc(
                   dnnl::prop_kind::forward_inference, dnnl::algorithm::convolution_direct, src, weights_any,
-                  dnnl::memory::desc({weight.size(0)}, DataType::bf16, Tag::a), dst, strides, pad, pad)
+                  dnnl::memory::desc({weight.size(0)}, type, Tag::a), dst, strides, pad, pad)
             : dnnl::convolution_forward::desc(dnnl::prop_kind::forward_inference, dnnl::algorithm::convolution_direct,
                                               src, weights_any, dst, strides, pad, pad);
     dnnl::primitive_attr attr;
     attr.set_scratchpad_mode(dnnl::scratchpad_mode::user);
     dnnl::convolution_forward::primitive_desc pd(descriptor, attr, onednn_cpu_engine());
     if (output[2] * output[3] <= kSmallOutput) {
-      // oneDNN's first choice (brgconv) is slower there than its older direct kernel (1,280 channels
-      // at 4x4, batch 8: 7.0 against 5.1 ms). next_impl() moves the descriptor itself along the list,
-      // so without that kernel the list is walked again from its start.
+      // oneDNN's first choice (brgconv) is slower there than its older direct kernel (bf16, 1,280 channels
+      // at 4x4, batch 8: 7.0 against 5.1 ms; fp32 about twice as slow). next_impl() moves the descriptor
+      // itself along the list, so without that kernel the list is walked again from its start.
+      const char* direct = type == DataType::bf16 ? "jit_bf16:" : "jit:";
       bool found = false;
-      do found = std::string(pd.impl_info_str()).starts_with("jit_bf16:");
+      do found = std::string(pd.impl_info_str()).starts_with(direct);
       while (!found && pd.next_impl());
       if (!found) pd = dnnl::convolution_forward::primitive_desc(descriptor, attr, onednn_cpu_engine());
     }
@@ -99,7 +105,7 @@ struct OnednnConv2d::State {
     dnnl::memory source =
         packed_in_place ? packed.front().weights
                         : dnnl::memory({{weight.size(0), weight.size(1), weight.size(2), weight.size(3)},
-                                        DataType::bf16, Tag::oihw},
+                                        dnnl_type(weight), Tag::oihw},
                                        onednn_cpu_engine(), plain.data_ptr());
     const bool in_place =
         pack_in_place && packed.empty() && weight.is_contiguous() && desc.get_size() <= weight.nbytes();
@@ -120,8 +126,9 @@ struct OnednnConv2d::State {
 };
 
 bool OnednnConv2d::applies(const torch::Tensor& x, const torch::Tensor& weight) {
-  return x.device().is_cpu() && x.scalar_type() == torch::kBFloat16 && weight.scalar_type() == torch::kBFloat16 &&
-         weight.device().is_cpu() && x.dim() == 4 && cpu_has_bf16_kernels();
+  const torch::ScalarType type = x.scalar_type();
+  return x.device().is_cpu() && weight.device().is_cpu() && x.dim() == 4 && weight.scalar_type() == type &&
+         (type == torch::kFloat || (type == torch::kBFloat16 && cpu_has_bf16_kernels()));
 }
 
 OnednnConv2d::OnednnConv2d() : state_(std::make_unique<State>()) {}
@@ -136,8 +143,8 @@ torch::Tensor OnednnConv2d::forward(const torch::Tensor& x, const torch::Tensor&
                                     int64_t stride, int64_t padding) {
   TORCH_CHECK(x.size(1) == weight.size(1), "conv2d: input has ", x.size(1), " channels, the weights expect ",
               weight.size(1));
-  TORCH_CHECK(!bias.defined() || bias.scalar_type() == torch::kBFloat16,
-              "conv2d: the bias must be bf16 like the weights");
+  TORCH_CHECK(!bias.defined() || bias.scalar_type() == weight.scalar_type(),
+              "conv2d: the bias must have the weights' dtype");
   const torch::Tensor input = x.contiguous(at::MemoryFormat::ChannelsLast);
   std::lock_guard<std::mutex> lock(state_->mutex);
   const State::Plan& plan = state_->plan_for(input, weight, bias, stride, padding);

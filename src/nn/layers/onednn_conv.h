@@ -1,12 +1,13 @@
 #pragma once
-// 2-D convolution of bf16 activations on the CPU through oneDNN directly, for the Conv2d layer
-// (docs/networks.md, "bf16 kernels"). Through ATen (libtorch 1.13) every bf16 convolution reorders
-// its weights into oneDNN's blocked layout on every call and converts the activations to and from a
-// blocked layout too: at full size that was 0.4 s of a 3.3 s UNet forward, and ATen's kernel choice
-// for 2,560 input channels ran at a quarter of the others' speed. Here the weights are reordered once
-// into the layout the kernel asks for, and the activations stay channels-last (NHWC), the layout the
-// kernel reads and writes itself: the output is a channels-last tensor, and the element-wise ops after
-// it (norms, SiLU, residual adds, concatenation, upsampling) keep that layout.
+// 2-D convolution of bf16 or fp32 activations on the CPU through oneDNN directly, for the Conv2d layer
+// (docs/networks.md, "bf16 kernels" and "The fp32 path"). Through ATen (libtorch 1.13) every such
+// convolution reorders its weights into oneDNN's blocked layout on every call and converts the
+// activations to and from a blocked layout too: at full size that was 0.4 s of a 3.3 s bf16 UNet
+// forward, and ATen's kernel choice for 2,560 input channels ran at a quarter of the others' speed.
+// Here the weights are reordered once into the layout the kernel asks for, and the activations stay
+// channels-last (NHWC), the layout the kernel reads and writes itself: the output is a channels-last
+// tensor, and the element-wise ops after it (norms, SiLU, residual adds, concatenation, upsampling)
+// keep that layout.
 #include <torch/torch.h>
 
 #include <memory>
@@ -15,8 +16,8 @@ namespace u3d::nn {
 
 class OnednnConv2d {
  public:
-  // Whether this path runs `x` through `weight`: bf16 on the CPU, with avx512_bf16 (elsewhere oneDNN
-  // has no bf16 kernels and ATen's emulation stays).
+  // Whether this path runs `x` through `weight`: both on the CPU and of one dtype, fp32 on any CPU, bf16
+  // with avx512_bf16 (elsewhere oneDNN has no bf16 kernels and ATen's emulation stays).
   static bool applies(const torch::Tensor& x, const torch::Tensor& weight);
 
   OnednnConv2d();
