@@ -42,40 +42,63 @@ U3D_INLINE f32x16 gelu(f32x16 x) {
   return 0.5f * x * (x >= 0.0f ? 2.0f - e : e);
 }
 
+// Element access for the two types: bf16 (as its 16 bits, rounded once on the way out) and fp32.
+U3D_INLINE f32x16 load_values(const uint16_t* p) { return load_bf16(p); }
+U3D_INLINE f32x16 load_values(const float* p) { return load(p); }
+U3D_INLINE void store_values(uint16_t* p, f32x16 v) { store_bf16(p, v); }
+U3D_INLINE void store_values(float* p, f32x16 v) { store(p, v); }
+
 // out[j] = hidden[j] * gelu(gate[j]) for j < n.
-U3D_VECTOR_CLONES void gate_row(const uint16_t* hidden, const uint16_t* gate, int64_t n, uint16_t* out) {
+template <class T>
+U3D_INLINE void gate_row_of(const T* hidden, const T* gate, int64_t n, T* out) {
   int64_t j = 0;
-  for (; j + kWidth <= n; j += kWidth) store_bf16(out + j, load_bf16(hidden + j) * gelu(load_bf16(gate + j)));
+  for (; j + kWidth <= n; j += kWidth)
+    store_values(out + j, load_values(hidden + j) * gelu(load_values(gate + j)));
   if (j < n) {
-    uint16_t h[kWidth] = {}, g[kWidth] = {}, rounded[kWidth];
+    T h[kWidth] = {}, g[kWidth] = {}, result[kWidth];
     std::copy(hidden + j, hidden + n, h);
     std::copy(gate + j, gate + n, g);
-    store_bf16(rounded, load_bf16(h) * gelu(load_bf16(g)));
-    std::copy(rounded, rounded + (n - j), out + j);
+    store_values(result, load_values(h) * gelu(load_values(g)));
+    std::copy(result, result + (n - j), out + j);
   }
+}
+
+U3D_VECTOR_CLONES void gate_row(const uint16_t* hidden, const uint16_t* gate, int64_t n, uint16_t* out) {
+  gate_row_of(hidden, gate, n, out);
+}
+U3D_VECTOR_CLONES void gate_row(const float* hidden, const float* gate, int64_t n, float* out) {
+  gate_row_of(hidden, gate, n, out);
+}
+
+template <class T>
+void gate_rows(const torch::Tensor& projected, torch::Tensor& out, int64_t n) {
+  const int64_t rows = projected.numel() / (2 * n);
+  const auto* in = reinterpret_cast<const T*>(projected.data_ptr());
+  auto* result = reinterpret_cast<T*>(out.data_ptr());
+  at::parallel_for(0, rows, std::max<int64_t>(1, (int64_t{1} << 14) / n), [&](int64_t begin, int64_t end) {
+    for (int64_t r = begin; r < end; ++r) gate_row(in + r * 2 * n, in + r * 2 * n + n, n, result + r * n);
+  });
 }
 
 }  // namespace
 
-bool geglu_bf16_applies(const torch::Tensor& projected) {
-  return projected.device().is_cpu() && projected.scalar_type() == torch::kBFloat16 && projected.dim() >= 1 &&
-         projected.is_contiguous() && projected.size(-1) % 2 == 0;
+bool geglu_applies(const torch::Tensor& projected) {
+  return projected.device().is_cpu() &&
+         (projected.scalar_type() == torch::kBFloat16 || projected.scalar_type() == torch::kFloat) &&
+         projected.dim() >= 1 && projected.is_contiguous() && projected.size(-1) % 2 == 0;
 }
 
-torch::Tensor geglu_bf16(const torch::Tensor& projected) {
-  TORCH_CHECK(geglu_bf16_applies(projected),
-              "geglu_bf16: not a contiguous bf16 CPU tensor with an even last dimension");
+torch::Tensor geglu(const torch::Tensor& projected) {
+  TORCH_CHECK(geglu_applies(projected), "geglu: not a contiguous bf16 or fp32 CPU tensor with an even last dimension");
   const int64_t n = projected.size(-1) / 2;
   std::vector<int64_t> sizes = projected.sizes().vec();
   sizes.back() = n;
   torch::Tensor out = torch::empty(sizes, projected.options());
   if (n == 0) return out;
-  const int64_t rows = projected.numel() / (2 * n);
-  const auto* in = reinterpret_cast<const uint16_t*>(projected.data_ptr());
-  auto* result = reinterpret_cast<uint16_t*>(out.data_ptr());
-  at::parallel_for(0, rows, std::max<int64_t>(1, (int64_t{1} << 14) / n), [&](int64_t begin, int64_t end) {
-    for (int64_t r = begin; r < end; ++r) gate_row(in + r * 2 * n, in + r * 2 * n + n, n, result + r * n);
-  });
+  if (projected.scalar_type() == torch::kBFloat16)
+    gate_rows<uint16_t>(projected, out, n);
+  else
+    gate_rows<float>(projected, out, n);
   return out;
 }
 

@@ -22,7 +22,7 @@ GEGLUImpl::GEGLUImpl(int64_t dim_in, int64_t dim_out, const torch::TensorOptions
 
 torch::Tensor GEGLUImpl::forward(const torch::Tensor& x) {
   const torch::Tensor projected = proj->forward(x);
-  if (geglu_bf16_applies(projected)) return geglu_bf16(projected);
+  if (geglu_applies(projected)) return geglu(projected);
   auto halves = projected.chunk(2, -1);
   return halves[0] * torch::gelu(halves[1]);
 }
