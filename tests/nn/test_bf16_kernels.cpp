@@ -40,20 +40,26 @@ struct ConvCase {
   bool bias;
 };
 
+// The shapes both precisions' convolutions are tested on.
+constexpr ConvCase kConvCases[] = {
+    {2, 8, 16, 9, 7, 3, 1, 1, true},    // odd sizes
+    {1, 16, 8, 12, 10, 3, 2, 1, true},  // a downsampler
+    {3, 24, 40, 5, 6, 1, 1, 0, false},  // 1x1, no bias
+    {8, 64, 32, 4, 4, 3, 1, 1, true},   // 16 output pixels: the direct kernel
+    {2, 4, 8, 1, 1, 3, 1, 1, true},     // one pixel
+};
+
+testing::Message describe(const ConvCase& c) {
+  return testing::Message() << c.batch << "x" << c.in << "x" << c.height << "x" << c.width << " -> " << c.out << " k"
+                            << c.kernel << " s" << c.stride;
+}
+
 TEST(Bf16Kernels, ConvolutionMatchesFp32OnTheSameValues) {
   U3D_SKIP_UNLESS_BF16_KERNELS();
   torch::NoGradGuard no_grad;
   torch::manual_seed(11);
-  const ConvCase cases[] = {
-      {2, 8, 16, 9, 7, 3, 1, 1, true},    // odd sizes
-      {1, 16, 8, 12, 10, 3, 2, 1, true},  // a downsampler
-      {3, 24, 40, 5, 6, 1, 1, 0, false},  // 1x1, no bias
-      {8, 64, 32, 4, 4, 3, 1, 1, true},   // 16 output pixels: the direct kernel
-      {2, 4, 8, 1, 1, 3, 1, 1, true},     // one pixel
-  };
-  for (const ConvCase& c : cases) {
-    SCOPED_TRACE(testing::Message() << c.batch << "x" << c.in << "x" << c.height << "x" << c.width << " -> " << c.out
-                                    << " k" << c.kernel << " s" << c.stride);
+  for (const ConvCase& c : kConvCases) {
+    SCOPED_TRACE(describe(c));
     Conv2d conv(c.in, c.out, c.kernel, c.stride, c.padding, c.bias, torch::TensorOptions());
     randomize_parameters(*conv, 0.2);
     set_precision(*conv, Precision::kBf16);
@@ -162,21 +168,32 @@ torch::Tensor group_norm_reference(const torch::Tensor& x, const GroupNorm& norm
   return silu ? torch::silu(y) : y;
 }
 
+struct NormCase {
+  int64_t batch, channels, groups, height, width;
+};
+
+testing::Message describe(const NormCase& c) {
+  return testing::Message() << c.batch << "x" << c.channels << "x" << c.height << "x" << c.width;
+}
+
+// Activations of `type` with a large common offset and a wide range (mean 200, standard deviation 3),
+// channels-last: variance from E[x^2] - mean^2 would lose it, and so does ATen 1.13's fp32 GroupNorm of
+// channels-last input (off by up to 0.14, docs/networks.md).
+torch::Tensor offset_activations(const NormCase& c, torch::ScalarType type) {
+  return (torch::randn({c.batch, c.channels, c.height, c.width}) * 3.0 + 200.0)
+      .to(type)
+      .contiguous(at::MemoryFormat::ChannelsLast);
+}
+
 TEST(Bf16Kernels, GroupNormOfChannelsLastInputMatchesFp32) {
   torch::NoGradGuard no_grad;
   torch::manual_seed(13);
-  struct Case {
-    int64_t batch, channels, groups, height, width;
-  };
   // 70x70 pixels: 19 full blocks of the statistics and a partial one; 1x1: a single pixel.
-  for (const Case& c : {Case{2, 64, 32, 9, 7}, Case{1, 32, 8, 70, 70}, Case{3, 12, 3, 1, 1}}) {
-    SCOPED_TRACE(testing::Message() << c.batch << "x" << c.channels << "x" << c.height << "x" << c.width);
+  for (const NormCase& c : {NormCase{2, 64, 32, 9, 7}, NormCase{1, 32, 8, 70, 70}, NormCase{3, 12, 3, 1, 1}}) {
+    SCOPED_TRACE(describe(c));
     GroupNorm norm(c.groups, c.channels, 1e-6, torch::TensorOptions());
     randomize_parameters(*norm, 1.0);
-    // A large common offset and a wide range: variance from E[x^2] - mean^2 would lose it.
-    const torch::Tensor x = (torch::randn({c.batch, c.channels, c.height, c.width}) * 3.0 + 200.0)
-                                .to(torch::kBFloat16)
-                                .contiguous(at::MemoryFormat::ChannelsLast);
+    const torch::Tensor x = offset_activations(c, torch::kBFloat16);
     ASSERT_TRUE(group_norm_channels_last_applies(x, norm->weight));
     for (bool silu : {false, true}) {
       SCOPED_TRACE(silu ? "with SiLU" : "plain");
@@ -222,6 +239,7 @@ TEST(Bf16Kernels, GroupNormDoesNotDependOnTheThreadCount) {
 TEST(Bf16Kernels, GroupNormOfOtherLayoutsStaysWithAten) {
   torch::NoGradGuard no_grad;
   GroupNorm norm(4, 16, 1e-5, torch::TensorOptions());
+  randomize_parameters(*norm, 1.0);  // not left uninitialised: whatever memory held (NaN fails the comparison)
   const torch::Tensor x = torch::randn({2, 16, 5, 5}).to(torch::kBFloat16);  // NCHW
   EXPECT_FALSE(group_norm_channels_last_applies(x, norm->weight));
   EXPECT_FALSE(group_norm_channels_last_applies(x.to(torch::kFloat), norm->weight));
@@ -234,16 +252,8 @@ TEST(Bf16Kernels, GroupNormOfOtherLayoutsStaysWithAten) {
 TEST(Fp32Kernels, ConvolutionMatchesFloat64) {
   torch::NoGradGuard no_grad;
   torch::manual_seed(21);
-  const ConvCase cases[] = {
-      {2, 8, 16, 9, 7, 3, 1, 1, true},    // odd sizes
-      {1, 16, 8, 12, 10, 3, 2, 1, true},  // a downsampler
-      {3, 24, 40, 5, 6, 1, 1, 0, false},  // 1x1, no bias
-      {8, 64, 32, 4, 4, 3, 1, 1, true},   // 16 output pixels
-      {2, 4, 8, 1, 1, 3, 1, 1, true},     // one pixel
-  };
-  for (const ConvCase& c : cases) {
-    SCOPED_TRACE(testing::Message() << c.batch << "x" << c.in << "x" << c.height << "x" << c.width << " -> " << c.out
-                                    << " k" << c.kernel << " s" << c.stride);
+  for (const ConvCase& c : kConvCases) {
+    SCOPED_TRACE(describe(c));
     Conv2d conv(c.in, c.out, c.kernel, c.stride, c.padding, c.bias, torch::TensorOptions());
     randomize_parameters(*conv, 0.2);
     const torch::Tensor x = torch::randn({c.batch, c.in, c.height, c.width});
@@ -288,18 +298,12 @@ TEST(Fp32Kernels, ConvolutionPackedInPlaceGivesTheSameValues) {
 TEST(Fp32Kernels, GroupNormOfChannelsLastInputMatchesFloat64) {
   torch::NoGradGuard no_grad;
   torch::manual_seed(23);
-  struct Case {
-    int64_t batch, channels, groups, height, width;
-  };
   // 20 channels: a partial vector of 4 at the end of each pixel.
-  for (const Case& c : {Case{2, 64, 32, 9, 7}, Case{1, 32, 8, 70, 70}, Case{3, 20, 5, 3, 1}}) {
-    SCOPED_TRACE(testing::Message() << c.batch << "x" << c.channels << "x" << c.height << "x" << c.width);
+  for (const NormCase& c : {NormCase{2, 64, 32, 9, 7}, NormCase{1, 32, 8, 70, 70}, NormCase{3, 20, 5, 3, 1}}) {
+    SCOPED_TRACE(describe(c));
     GroupNorm norm(c.groups, c.channels, 1e-6, torch::TensorOptions());
     randomize_parameters(*norm, 1.0);
-    // Mean 200, standard deviation 3: ATen 1.13's fp32 GroupNorm of this channels-last input is off by
-    // up to 0.14 (docs/networks.md).
-    const torch::Tensor x = (torch::randn({c.batch, c.channels, c.height, c.width}) * 3.0 + 200.0)
-                                .contiguous(at::MemoryFormat::ChannelsLast);
+    const torch::Tensor x = offset_activations(c, torch::kFloat);
     ASSERT_TRUE(group_norm_channels_last_applies(x, norm->weight));
     for (bool silu : {false, true}) {
       SCOPED_TRACE(silu ? "with SiLU" : "plain");

@@ -42,12 +42,6 @@ U3D_INLINE f32x16 gelu(f32x16 x) {
   return 0.5f * x * (x >= 0.0f ? 2.0f - e : e);
 }
 
-// Element access for the two types: bf16 (as its 16 bits, rounded once on the way out) and fp32.
-U3D_INLINE f32x16 load_values(const uint16_t* p) { return load_bf16(p); }
-U3D_INLINE f32x16 load_values(const float* p) { return load(p); }
-U3D_INLINE void store_values(uint16_t* p, f32x16 v) { store_bf16(p, v); }
-U3D_INLINE void store_values(float* p, f32x16 v) { store(p, v); }
-
 // out[j] = hidden[j] * gelu(gate[j]) for j < n.
 template <class T>
 U3D_INLINE void gate_row_of(const T* hidden, const T* gate, int64_t n, T* out) {

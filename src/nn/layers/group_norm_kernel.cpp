@@ -27,14 +27,6 @@ U3D_INLINE f32x16 silu(f32x16 x) {
   return x * ((x >= 0.0f ? splat(1.0f) : e) / (1.0f + e));
 }
 
-// Element access for the two input types: bf16 (as its 16 bits) and fp32.
-U3D_INLINE float to_float(uint16_t v) { return bf16_to_float(v); }
-U3D_INLINE float to_float(float v) { return v; }
-U3D_INLINE f32x16 load_values(const uint16_t* p) { return load_bf16(p); }
-U3D_INLINE f32x16 load_values(const float* p) { return load(p); }
-U3D_INLINE void store_values(uint16_t* p, f32x16 v) { store_bf16(p, v); }
-U3D_INLINE void store_values(float* p, f32x16 v) { store(p, v); }
-
 template <class T>
 U3D_INLINE void add_pixels_of(const T* x, int64_t pixels, int64_t channels, float* sums) {
   for (int64_t p = 0; p < pixels; ++p) {
@@ -57,26 +49,27 @@ U3D_INLINE void add_squared_deviations_of(const T* x, int64_t pixels, int64_t ch
 
 // y = x * scale + shift per channel, then SiLU if asked; 16 channels at a time, the last ones of a pixel
 // through a padded copy.
+U3D_INLINE f32x16 scale_shift(f32x16 v, const float* scale, const float* shift, bool apply_silu) {
+  v = v * load(scale) + load(shift);
+  return apply_silu ? silu(v) : v;
+}
+
 template <class T>
 U3D_INLINE void scale_pixels_of(const T* x, int64_t pixels, int64_t channels, const float* scale, const float* shift,
                                 bool apply_silu, T* y) {
-  const auto compute = [&](f32x16 v, const float* s, const float* t) {
-    v = v * load(s) + load(t);
-    return apply_silu ? silu(v) : v;
-  };
   const int64_t full = channels / kWidth * kWidth;
   for (int64_t p = 0; p < pixels; ++p) {
     const T* in = x + p * channels;
     T* out = y + p * channels;
     for (int64_t c = 0; c < full; c += kWidth)
-      store_values(out + c, compute(load_values(in + c), scale + c, shift + c));
+      store_values(out + c, scale_shift(load_values(in + c), scale + c, shift + c, apply_silu));
     if (full < channels) {
       T values[kWidth] = {}, results[kWidth];
       float s[kWidth] = {}, t[kWidth] = {};
       std::copy(in + full, in + channels, values);
       std::copy(scale + full, scale + channels, s);
       std::copy(shift + full, shift + channels, t);
-      store_values(results, compute(load_values(values), s, t));
+      store_values(results, scale_shift(load_values(values), s, t, apply_silu));
       std::copy(results, results + (channels - full), out + full);
     }
   }

@@ -50,6 +50,14 @@ U3D_INLINE void store_bf16(uint16_t* p, f32x16 f) {
 
 U3D_INLINE float bf16_to_float(uint16_t v) { return std::bit_cast<float>(static_cast<uint32_t>(v) << 16); }
 
+// Element access for kernels written once for bf16 (its 16 bits; rounded once on the way out) and fp32.
+U3D_INLINE float to_float(uint16_t v) { return bf16_to_float(v); }
+U3D_INLINE float to_float(float v) { return v; }
+U3D_INLINE f32x16 load_values(const uint16_t* p) { return load_bf16(p); }
+U3D_INLINE f32x16 load_values(const float* p) { return load(p); }
+U3D_INLINE void store_values(uint16_t* p, f32x16 v) { store_bf16(p, v); }
+U3D_INLINE void store_values(float* p, f32x16 v) { store(p, v); }
+
 // exp(x) for x <= 0 (relative error about 1e-7): x = n ln 2 + r with n an integer (rounded by adding
 // and subtracting 1.5 * 2^23, whose low mantissa bits then hold n) and ln 2 split in two parts
 // (Cody-Waite), exp(r) by the degree-6 minimax polynomial of the Cephes library's expf, and 2^n built
