@@ -168,7 +168,8 @@ ScalarGrid joined_and_cut_field(const Mesh& initial, const ScalarGrid& hull) {
   for (int p = 0; p < pieces; ++p) {
     for (size_t i = 0; i < piece.size(); ++i) marked[i] = piece[i] == p;
     const std::vector<uint8_t> distance = chebyshev_distance(marked, n, kJoinGap + 1);
-    for (size_t i = 0; i < piece.size(); ++i) near_pieces[i] = uint8_t(std::min(near_pieces[i] + (distance[i] <= kJoinGap), 2));
+    for (size_t i = 0; i < piece.size(); ++i)
+      near_pieces[i] = uint8_t(std::min(near_pieces[i] + (distance[i] <= kJoinGap), 2));
   }
   for (size_t i = 0; i < piece.size(); ++i) marked[i] = near_pieces[i] == 2;
   const std::vector<uint8_t> from_gap = chebyshev_distance(marked, n, kJoinZone + 1);
@@ -326,8 +327,8 @@ std::optional<Mesh> start_for_extra_pieces(const Mesh& initial, const ViewSet& v
   if (pieces <= hull_pieces) return std::nullopt;
   const ScalarGrid joined = joined_and_cut_field(initial, hull);
   const int joined_pieces = count_inside_components(joined);
-  const std::string counts = "silhouette fit: the initial mesh has " + std::to_string(pieces) + " pieces, the masks' hull " +
-                             std::to_string(hull_pieces);
+  const std::string counts = "silhouette fit: the initial mesh has " + std::to_string(pieces) +
+                             " pieces, the masks' hull " + std::to_string(hull_pieces);
   if (joined_pieces >= 1 && joined_pieces <= hull_pieces) {
     progress(counts + ": joined and cut by the hull, " + std::to_string(joined_pieces) + " piece(s)");
     return hull_surface(joined, target_faces);
