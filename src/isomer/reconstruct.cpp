@@ -18,10 +18,10 @@ Mesh stage_initial_mesh(const ViewSet& views, const ReconstructOptions& options,
   if (!fit.enabled) return initial;
   const size_t faces = size_t(options.init.target_faces);
   // A mesh that misses most of a mask is fitted to the masks; one with more pieces than the masks'
-  // hull gives way to that hull.
+  // hull is joined and cut by that hull.
   std::optional<Mesh> replaced = min_silhouette_iou(initial, views) < fit.initial_min_iou
                                      ? fit_to_silhouettes(initial, views, fit.resolution, faces)
-                                     : hull_for_extra_pieces(initial, views, fit, faces);
+                                     : start_for_extra_pieces(initial, views, fit, faces);
   if (!replaced) return initial;
   if (fitted) *fitted = true;
   return std::move(*replaced);

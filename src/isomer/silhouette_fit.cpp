@@ -38,6 +38,15 @@ constexpr int kLocalBand = 4;
 constexpr float kOutsideMargin = 0.5f;
 constexpr float kInsideMargin = 1.f;
 
+// An initial mesh with more pieces than the masks' hull is joined where its pieces come within
+// kJoinGap samples (Chebyshev, on the pieces grid) of each other: a grey-scale closing by a cube of that
+// radius, used within kJoinZone samples of such a gap (elsewhere the mesh's own field). Screened Poisson
+// cut spot's horns and ears off the head and human_man's hands off the wrists by a sample or two at
+// 64^3. A closing everywhere also fills every concavity narrower than the cube, which made human_man 7 %
+// worse in CD-L1 (radius 2) and the bundled example 0.14 dB worse in PSNR (radius 3).
+constexpr int kJoinGap = 2;
+constexpr int kJoinZone = 4;
+
 // What a view shows of the mesh: the depth of its nearest surface at every pixel, and the pixels of
 // the mask it leaves uncovered (a part the mesh lacks).
 struct DepthView {
@@ -119,6 +128,58 @@ std::vector<uint8_t> chebyshev_distance(const std::vector<uint8_t>& marked, int 
     distance.swap(next);
   }
   return distance;
+}
+
+// Grey-scale dilation (take_max) or erosion of an n^3 grid by a cube of radius r, an axis at a time.
+void cube_filter(std::vector<float>& values, int n, int r, bool take_max) {
+  std::vector<float> next(values.size());
+  const size_t stride[3] = {1, size_t(n), size_t(n) * size_t(n)};
+  for (int axis = 0; axis < 3; ++axis) {
+    const size_t across_a = stride[axis == 0 ? 1 : 0], across_b = stride[axis == 2 ? 1 : 2];
+#pragma omp parallel for schedule(static)
+    for (int line = 0; line < n * n; ++line) {
+      const size_t base = size_t(line % n) * across_a + size_t(line / n) * across_b;
+      for (int i = 0; i < n; ++i) {
+        float best = values[base + size_t(i) * stride[axis]];
+        for (int j = std::max(0, i - r); j <= std::min(n - 1, i + r); ++j) {
+          const float v = values[base + size_t(j) * stride[axis]];
+          best = take_max ? std::max(best, v) : std::min(best, v);
+        }
+        next[base + size_t(i) * stride[axis]] = best;
+      }
+    }
+    values.swap(next);
+  }
+}
+
+// The initial mesh's signed distance on the hull's grid, its pieces joined across the gaps between them
+// (kJoinGap, kJoinZone), and cut by the masks' hull: what lies outside a mask (a band across a gap the
+// masks show open) goes. Same units as the hull (0.5 per voxel).
+ScalarGrid joined_and_cut_field(const Mesh& initial, const ScalarGrid& hull) {
+  const int n = hull.nx;  // the grid is a cube
+  const float to_field = 0.5f / hull.spacing;
+  ScalarGrid own = hull;
+  sample_signed_distance(initial, 1.f / to_field, own);
+  for (float& value : own.values) value *= to_field;
+  int pieces = 0;
+  const std::vector<int> piece = label_inside_components(own, &pieces);
+  // The gaps: samples within kJoinGap of two pieces or more.
+  std::vector<uint8_t> near_pieces(piece.size(), 0), marked(piece.size());
+  for (int p = 0; p < pieces; ++p) {
+    for (size_t i = 0; i < piece.size(); ++i) marked[i] = piece[i] == p;
+    const std::vector<uint8_t> distance = chebyshev_distance(marked, n, kJoinGap + 1);
+    for (size_t i = 0; i < piece.size(); ++i)
+      near_pieces[i] = uint8_t(std::min(near_pieces[i] + (distance[i] <= kJoinGap), 2));
+  }
+  for (size_t i = 0; i < piece.size(); ++i) marked[i] = near_pieces[i] == 2;
+  const std::vector<uint8_t> from_gap = chebyshev_distance(marked, n, kJoinZone + 1);
+  std::vector<float> closed = own.values;
+  cube_filter(closed, n, kJoinGap, true);
+  cube_filter(closed, n, kJoinGap, false);
+  ScalarGrid field = hull;
+  for (size_t i = 0; i < field.values.size(); ++i)
+    field.values[i] = std::min(from_gap[i] <= kJoinZone ? closed[i] : own.values[i], hull.values[i]);
+  return field;
 }
 
 }  // namespace
@@ -257,15 +318,22 @@ Mesh silhouette_hull(const ViewSet& views, int resolution, size_t target_faces) 
   return hull_surface(visual_hull_field(views, resolution, HullMasks::Normals), target_faces);
 }
 
-std::optional<Mesh> hull_for_extra_pieces(const Mesh& initial, const ViewSet& views,
-                                          const SilhouetteFitOptions& options, size_t target_faces) {
+std::optional<Mesh> start_for_extra_pieces(const Mesh& initial, const ViewSet& views,
+                                           const SilhouetteFitOptions& options, size_t target_faces) {
   const int pieces = mesh_topology(initial).components;
   if (pieces <= 1) return std::nullopt;  // the hull has at least one
   const ScalarGrid hull = visual_hull_field(views, options.pieces_resolution, HullMasks::Normals);
   const int hull_pieces = count_inside_components(hull);
   if (pieces <= hull_pieces) return std::nullopt;
-  progress("silhouette fit: the initial mesh has " + std::to_string(pieces) + " pieces, the masks' hull " +
-           std::to_string(hull_pieces) + ": starting from the hull");
+  const ScalarGrid joined = joined_and_cut_field(initial, hull);
+  const int joined_pieces = count_inside_components(joined);
+  const std::string counts = "silhouette fit: the initial mesh has " + std::to_string(pieces) +
+                             " pieces, the masks' hull " + std::to_string(hull_pieces);
+  if (joined_pieces >= 1 && joined_pieces <= hull_pieces) {
+    progress(counts + ": joined and cut by the hull, " + std::to_string(joined_pieces) + " piece(s)");
+    return hull_surface(joined, target_faces);
+  }
+  progress(counts + ", joined " + std::to_string(joined_pieces) + ": starting from the hull");
   return hull_surface(hull, target_faces);
 }
 

@@ -42,17 +42,17 @@ struct SilhouetteFitOptions {
   // check is on the smoothed and subdivided mesh (what would be output); the fit starts from the
   // optimised mesh before smoothing.
   float initial_min_iou = 0.3f;
-  // The initial mesh is replaced by the masks' visual hull (on a grid of pieces_resolution, decimated
-  // to the initial mesh's face count) when it has more pieces than that hull: screened Poisson can
-  // join parts across a gap the masks show open and cut them off where the masks hold them together
-  // (spot's horns: one piece with a band across the gap between them, floating above the head;
-  // human_man: three pieces). Remeshing keeps the pieces, so the band survived the optimisation as a
-  // wire over the background (134 pixels of the bundled example's front view) and the horns as a piece
-  // of their own. Fitting that mesh instead (fit_to_silhouettes) keeps its depth but threads it with
-  // tunnels along the rays of the mask pixels it misses (Euler characteristic -30 to -148 on spot at
-  // 64^3 to 192^3); the hull has the masks' own topology, and the optimisation finds the depth from it
+  // An initial mesh with more pieces than the masks' visual hull (on a grid of pieces_resolution) is
+  // joined and cut by that hull (start_for_extra_pieces): screened Poisson can join parts across a gap
+  // the masks show open and cut them off where the masks hold them together (spot's horns: one piece
+  // with a band across the gap between them, floating above the head; human_man's hands). Remeshing
+  // keeps the pieces, so the band survived the optimisation as a wire over the background (134 pixels
+  // of the bundled example's front view) and the horns as a piece of their own. Fitting that mesh
+  // instead (fit_to_silhouettes) keeps its depth but threads it with tunnels along the rays of the mask
+  // pixels it misses (Euler characteristic -30 to -148 on spot at 64^3 to 192^3); starting from the hull
+  // itself loses the Poisson surface's detail (spot 4 % worse in CD-L1 than without any fit)
   // (docs/evaluation.md, "Geometry over the background"). 64 is the Poisson surface's own resolution
-  // (depth 6); the hull there costs about 0.3 s.
+  // (depth 6).
   int pieces_resolution = 64;
   float final_min_iou = 0.97f;
   // Voxels per axis over the views' box [-1, 1]^3: for the initial mesh, and for the optimised mesh
@@ -87,11 +87,14 @@ float min_silhouette_iou(const Mesh& mesh, const ViewSet& views);
 // both cover: how well a candidate explains the normal maps (180 when they share no pixel).
 float normal_map_error(const Mesh& mesh, const ViewSet& views);
 
-// The masks' hull (silhouette_hull) when `initial` has more pieces than it, on a grid of
-// options.pieces_resolution, decimated to `target_faces`; empty otherwise. Reports the pieces as a
-// progress message when it replaces the mesh.
-std::optional<Mesh> hull_for_extra_pieces(const Mesh& initial, const ViewSet& views,
-                                          const SilhouetteFitOptions& options, size_t target_faces);
+// A start for an initial mesh with more pieces than the masks' hull (on a grid of
+// options.pieces_resolution); empty when it has no more. On that grid, the mesh's own signed distance,
+// its pieces joined across gaps of up to two samples between them (closed by a cube there, within four
+// samples of the gap) and cut by the hull, decimated to `target_faces`: the mesh's surface is kept but
+// where the masks contradict it or it falls apart. When that still has more pieces than the hull, the
+// hull itself. Reports the pieces as a progress message.
+std::optional<Mesh> start_for_extra_pieces(const Mesh& initial, const ViewSet& views,
+                                           const SilhouetteFitOptions& options, size_t target_faces);
 
 // The visual hull of the normal maps' masks on a grid of `resolution`, decimated to `target_faces`.
 Mesh silhouette_hull(const ViewSet& views, int resolution, size_t target_faces);

@@ -34,5 +34,19 @@ TEST(GridComponents, CountsSeparateSolidsSixConnected) {
   EXPECT_EQ(count_inside_components(grid), 2);
 }
 
+TEST(GridComponents, LabelsEachSampleWithItsPiece) {
+  ScalarGrid grid = empty_grid(8);
+  fill(grid, 1, 1, 1, 2, 2, 2);
+  fill(grid, 5, 5, 5, 6, 6, 6);
+  int count = 0;
+  const std::vector<int> label = label_inside_components(grid, &count);
+  EXPECT_EQ(count, 2);
+  EXPECT_EQ(label[grid.index(0, 0, 0)], -1);
+  EXPECT_EQ(label[grid.index(1, 1, 1)], 0);  // numbered in the order of their first samples
+  EXPECT_EQ(label[grid.index(2, 2, 2)], 0);
+  EXPECT_EQ(label[grid.index(5, 5, 5)], 1);
+  EXPECT_EQ(label[grid.index(6, 6, 6)], 1);
+}
+
 }  // namespace
 }  // namespace u3d

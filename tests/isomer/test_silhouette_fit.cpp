@@ -211,27 +211,50 @@ TEST(SilhouetteFit, NormalMapErrorMeasuresHowWellAMeshExplainsTheMaps) {
 }
 
 // Issue 40: an initial mesh with more pieces than the masks' hull (Poisson cut a part off and joined
-// it across a gap) gives way to the hull, which has the masks' own pieces; one whose pieces the hull
-// has is kept.
-TEST(SilhouetteFit, InitialMeshWithMorePiecesThanTheHullGivesWayToTheHull) {
+// it across a gap) is joined and cut by the hull: the band across the gap goes, the part joins the
+// body, and the rest of the mesh's surface is kept where the hull would be larger. Parts too far apart
+// to join give way to the hull; a mesh whose pieces the hull has is kept.
+TEST(SilhouetteFit, InitialMeshWithMorePiecesThanTheHullIsJoinedAndCut) {
   const Box body{{-0.5f, -0.5f, -0.25f}, {0.5f, 0.25f, 0.25f}};
-  const Box horn{{-0.125f, 0.25f, -0.125f}, {0.125f, 0.5f, 0.125f}};
-  const ViewSet views = boxes_views({body, horn}, 128);
-  SilhouetteFitOptions options;
-  // The horn cut off the body: two pieces, where the masks hold one.
-  const Box floating{{-0.125f, 0.3125f, -0.125f}, {0.125f, 0.5f, 0.125f}};
-  const std::optional<Mesh> hull = hull_for_extra_pieces(union_of({body, floating}), views, options, 2000);
-  ASSERT_TRUE(hull);
-  const MeshTopology topo = mesh_topology(*hull);
-  EXPECT_TRUE(topo.closed_manifold());
+  const Box left_horn{{-0.375f, 0.25f, -0.125f}, {-0.125f, 0.5f, 0.125f}};
+  const Box right_horn{{0.125f, 0.25f, -0.125f}, {0.375f, 0.5f, 0.125f}};
+  const ViewSet views = boxes_views({body, left_horn, right_horn}, 128);
+  SilhouetteFitOptions options;  // 64^3: a sample is 1/32 apart, 2 px of these views
+  // A body smaller than the masks allow (nothing contradicts it), and both horns in one piece with a
+  // band across the gap between them, cut off the body by one sample.
+  const Box smaller_body{{-0.375f, -0.375f, -0.1875f}, {0.375f, 0.25f, 0.1875f}};
+  const Box horns_and_band{{-0.375f, 0.28125f, -0.125f}, {0.375f, 0.5f, 0.125f}};
+  const std::optional<Mesh> joined =
+      start_for_extra_pieces(union_of({smaller_body, horns_and_band}), views, options, 2000);
+  ASSERT_TRUE(joined);
+  MeshTopology topo = mesh_topology(*joined);
+  EXPECT_TRUE(topo.closed_manifold()) << topo.summary();
   EXPECT_EQ(topo.components, 1);
   EXPECT_EQ(topo.euler_characteristic, 2);
-  EXPECT_LE(hull->face_count(), 2000u);
-  EXPECT_GT(min_iou(*hull, views), 0.95f);
+  EXPECT_LE(joined->face_count(), 2000u);
+  float widest = 0.f;
+  for (const Vec3f& p : joined->positions) {
+    EXPECT_FALSE(std::abs(p.x()) < 0.09f && p.y() > 0.3f) << "the band over the gap is kept at " << p.transpose();
+    if (p.y() < 0.2f) widest = std::max(widest, std::abs(p.x()));
+  }
+  EXPECT_NEAR(widest, 0.375f, 0.02f);  // the smaller body's sides, not the hull's at 0.5
+  const double horns = 2 * 0.25 * 0.25 * 0.25, kept = 0.75 * 0.625 * 0.375 + horns;
+  EXPECT_NEAR(topo.volume, kept, 0.02);  // the hull holds 0.406
+  // The horn floating too far above the body to join: the hull, with the masks' one piece.
+  const Box horn{{-0.125f, 0.25f, -0.125f}, {0.125f, 0.5f, 0.125f}};
+  const ViewSet one_horn = boxes_views({body, horn}, 128);
+  const Box far{{-0.125f, 0.4375f, -0.125f}, {0.125f, 0.5f, 0.125f}};
+  const std::optional<Mesh> hull = start_for_extra_pieces(union_of({body, far}), one_horn, options, 2000);
+  ASSERT_TRUE(hull);
+  topo = mesh_topology(*hull);
+  EXPECT_TRUE(topo.closed_manifold());
+  EXPECT_EQ(topo.components, 1);
+  EXPECT_NEAR(topo.volume, 0.375 + 0.25 * 0.25 * 0.25, 0.02);
+  EXPECT_GT(min_iou(*hull, one_horn), 0.95f);
   // One piece, or as many as the hull has: kept.
-  EXPECT_FALSE(hull_for_extra_pieces(union_of({body}), views, options, 2000));
+  EXPECT_FALSE(start_for_extra_pieces(union_of({body}), one_horn, options, 2000));
   const Box apart{{0.625f, -0.5f, -0.125f}, {0.875f, 0.f, 0.125f}};
-  EXPECT_FALSE(hull_for_extra_pieces(union_of({body, apart}), boxes_views({body, apart}, 128), options, 2000));
+  EXPECT_FALSE(start_for_extra_pieces(union_of({body, apart}), boxes_views({body, apart}, 128), options, 2000));
 }
 
 // Pieces hidden in every view behind or inside others go; a piece that shows pixels of its own stays.
