@@ -49,7 +49,7 @@ nlohmann::json mask_agreement_json(const MaskAgreement& m) {
 nlohmann::json input_view_psnr_json(const InputViewPsnr& p) {
   nlohmann::json views = nlohmann::json::array();
   for (View v : kAllViews)
-    views.push_back({{"view", view_name(v)}, {"psnr", p.views[size_t(v)]}, {"mask_pixels", p.mask_pixels[size_t(v)]}});
+    views.push_back({{"view", view_name(v)}, {"psnr", p.views[size_t(v)]}, {"pixels", p.pixels[size_t(v)]}});
   return {{"psnr", p.mean}, {"ssaa", p.ssaa}, {"views", views}};
 }
 
@@ -139,7 +139,7 @@ std::string report_summary(const EvalReport& r) {
   }
   if (r.input_view_psnr) {
     const InputViewPsnr& p = *r.input_view_psnr;
-    s += "input views:    PSNR " + format("%.3f", p.mean) + " dB over their masks (mean of 4;";
+    s += "input views:    PSNR " + format("%.3f", p.mean) + " dB where mesh and mask meet (mean of 4;";
     for (View v : kAllViews) s += std::string(" ") + view_name(v) + " " + format("%.2f", p.views[size_t(v)]);
     s += ")\n";
   }

@@ -4,7 +4,6 @@
 #include <cmath>
 
 #include "core/error.h"
-#include "eval/appearance.h"
 #include "eval/image_metrics.h"
 #include "render/rasterizer.h"
 #include "render/shade.h"
@@ -22,23 +21,21 @@ InputViewPsnr input_view_psnr(const Mesh& mesh, const ViewSet& views, int ssaa) 
     Camera camera = view_camera(v, rgb.width);
     camera.width *= ssaa;
     camera.height *= ssaa;
-    const Image render =
-        composite_on_white(downsample_alpha_weighted(shade_colors(rasterize(mesh, camera), mesh), ssaa));
-    const Image view = composite_on_white(rgb);
+    const Image render = downsample_alpha_weighted(shade_colors(rasterize(mesh, camera), mesh), ssaa);
     double sum = 0;
     size_t pixels = 0;
-    for (size_t p = 0; p < view.pixel_count(); ++p) {
-      if (!is_foreground(rgb.data[4 * p + 3])) continue;
+    for (size_t p = 0; p < rgb.pixel_count(); ++p) {
+      if (!is_foreground(rgb.data[4 * p + 3]) || !is_foreground(render.data[4 * p + 3])) continue;
       ++pixels;
       for (int c = 0; c < 3; ++c) {
-        const double d = double(render.data[3 * p + c]) - double(view.data[3 * p + c]);
+        const double d = double(render.data[4 * p + c]) - double(rgb.data[4 * p + c]);
         sum += d * d;
       }
     }
-    require(pixels > 0, std::string("input-view PSNR: the ") + view_name(v) + " view's mask is empty");
-    const double mse = sum / (3.0 * double(pixels));
     const size_t k = size_t(v);
-    result.mask_pixels[k] = pixels;
+    result.pixels[k] = pixels;
+    if (pixels == 0) continue;  // 0 dB
+    const double mse = sum / (3.0 * double(pixels));
     result.views[k] = mse > 0 ? std::min(kPsnrCapDb, -10.0 * std::log10(mse)) : kPsnrCapDb;
     result.mean += result.views[k] / 4.0;
   }

@@ -78,7 +78,7 @@ TEST(InputViewPsnr, TheRightTextureReproducesItsViews) {
   const InputViewPsnr p = input_view_psnr(box_with_quad_colors(kUnitBox.first, kUnitBox.second, quad_colors()), views, 2);
   EXPECT_EQ(p.ssaa, 2);
   for (View v : kAllViews) {
-    EXPECT_EQ(p.mask_pixels[size_t(v)], 32u * 32u) << view_name(v);
+    EXPECT_EQ(p.pixels[size_t(v)], 32u * 32u) << view_name(v);
     EXPECT_EQ(p.views[size_t(v)], kPsnrCapDb) << view_name(v);
   }
   EXPECT_EQ(p.mean, kPsnrCapDb);
@@ -97,23 +97,32 @@ TEST(InputViewPsnr, AWrongTextureScoresAsItsColourErrorSays) {
   EXPECT_NEAR(p.mean, (2 * kPsnrCapDb + 2 * expected) / 4, 1e-4);
 }
 
-TEST(InputViewPsnr, UncoveredMaskPixelsCountAsWhiteAndGeometryOffTheMaskDoesNot) {
-  // The views' box reaches 8 px further right than the mesh: the front and back masks are 40 x 32 px,
-  // of which 8 x 32 are left white.
+TEST(InputViewPsnr, OnlyPixelsInBothMasksCount) {
+  // The views' box reaches 8 px further right than the mesh: of the front and back masks' 40 x 32 px,
+  // the 32 x 32 the mesh covers are compared (the rest is a geometry error, not the texture's).
   const testing::Box wider{kUnitBox.first, Vec3f(0.5f + 8 * kPixel, 0.5f, 0.5f)};
+  std::array<Vec3f, 6> swapped = quad_colors();
+  std::swap(swapped[5], swapped[4]);
   const InputViewPsnr p =
-      input_view_psnr(box_with_quad_colors(kUnitBox.first, kUnitBox.second, quad_colors()), painted_views(wider), 2);
+      input_view_psnr(box_with_quad_colors(kUnitBox.first, kUnitBox.second, swapped), painted_views(wider), 2);
+  const double expected = psnr_of_mse((quad_color(5) - quad_color(4)).squaredNorm() / 3.0);
   for (View v : {View::Front, View::Back}) {
-    const Vec3f seen = quad_color(kQuadSeenBy[size_t(v)]);
-    const double mse = (8.0 / 40.0) * (Vec3f::Ones() - seen).squaredNorm() / 3.0;
-    EXPECT_EQ(p.mask_pixels[size_t(v)], 40u * 32u) << view_name(v);
-    EXPECT_NEAR(p.views[size_t(v)], psnr_of_mse(mse), 1e-4) << view_name(v);
+    EXPECT_EQ(p.pixels[size_t(v)], 32u * 32u) << view_name(v);
+    EXPECT_NEAR(p.views[size_t(v)], expected, 1e-4) << view_name(v);
   }
+  EXPECT_EQ(p.pixels[size_t(View::Right)], 32u * 32u);
   EXPECT_EQ(p.views[size_t(View::Right)], kPsnrCapDb);
   // The other way round: the mesh's extra 8 columns lie over the views' background, outside the masks.
   const InputViewPsnr over =
       input_view_psnr(box_with_quad_colors(wider.first, wider.second, quad_colors()), painted_views(kUnitBox), 2);
+  EXPECT_EQ(over.pixels[size_t(View::Front)], 32u * 32u);
   EXPECT_EQ(over.mean, kPsnrCapDb);
+  // A mesh no view sees over its mask: nothing to compare, 0 dB.
+  const Vec3f far = Vec3f(0.5f + 16 * kPixel, 0.5f + 16 * kPixel, 0.5f + 16 * kPixel);
+  const InputViewPsnr off =
+      input_view_psnr(box_with_quad_colors(far, far + Vec3f::Constant(4 * kPixel), quad_colors()), painted_views(kUnitBox), 2);
+  EXPECT_EQ(off.pixels[size_t(View::Front)], 0u);
+  EXPECT_EQ(off.mean, 0.0);
 }
 
 TEST(InputViewPsnr, SeesATextureCoarserThanTheViews) {
