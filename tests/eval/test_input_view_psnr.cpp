@@ -6,6 +6,7 @@
 #include <cmath>
 #include <functional>
 
+#include "core/error.h"
 #include "core/synthetic_views.h"
 #include "eval/image_metrics.h"
 #include "eval/input_view_psnr.h"
