@@ -14,8 +14,9 @@
 //   render's (coverage >= 0.5) and the R, G, B channels of their straight (not composited) sRGB
 //   values in [0, 1], capped at kPsnrCapDb; 0 dB for a view with no such pixel.
 // Only where both show the object is colour compared: mask pixels the mesh leaves uncovered are a
-// geometry error (mask_agreement.h counts them), and counted here as white against the object they
-// would outweigh the texture (0.4 % of avocado's mask pixels at 2048 px, 85 % of such an MSE).
+// geometry error (mask_agreement.h counts them), and composited on white they outweigh the texture:
+// on avocado at 2048 px, the 0.4 % of mask pixels that render or view covers only in part held 85 %
+// of the squared error over the whole mask.
 // The mesh must be in the views' frame (what `reconstruct` writes unless asked for the official
 // output scale).
 #include <array>
