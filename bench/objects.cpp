@@ -95,7 +95,7 @@ std::string fmt(double v, const char* spec) {
 }
 
 const std::vector<std::string> kMetricKeys = {"cd",   "iou",  "fscore",  "fscore_visible", "hidden",
-                                              "psnr", "ssim", "silhouette_iou_min", "spurious_px", "spurious_pct",
+                                              "psnr", "ssim", "input_psnr", "silhouette_iou_min", "spurious_px", "spurious_pct",
                                               "spurious_blob", "missing_blob", "components", "hull_components",
                                               "seconds", "faces", "mb"};
 
@@ -139,9 +139,9 @@ double min_silhouette_iou(const std::string& output) {
 
 std::string markdown(const json& rows, const json& means, const std::string& fscore_label) {
   std::string md = "| object | res | variant | CD-L1 | Vol. IoU | " + fscore_label + " | " + fscore_label +
-                   " visible GT | hidden GT | PSNR | SSIM | min sil. IoU | spurious px | spurious % | spurious blob | "
+                   " visible GT | hidden GT | PSNR | SSIM | input-view PSNR | min sil. IoU | spurious px | spurious % | spurious blob | "
                    "missing blob | pieces / hull | time (s) | faces | GLB (MB) | status |\n"
-                   "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+                   "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   auto cell = [](const json& row, const std::string& key, const char* spec) {
     return row.contains(key) && row[key].is_number() ? fmt(row[key].get<double>(), spec) : std::string("-");
   };
@@ -150,7 +150,7 @@ std::string markdown(const json& rows, const json& means, const std::string& fsc
           r["variant"].get<std::string>() + " | " + cell(r, "cd", "%.5f") + " | " + cell(r, "iou", "%.4f") + " | " +
           cell(r, "fscore", "%.4f") + " | " + cell(r, "fscore_visible", "%.4f") + " | " + cell(r, "hidden", "%.3f") +
           " | " + cell(r, "psnr", "%.2f") + " | " + cell(r, "ssim", "%.4f") + " | " +
-          cell(r, "silhouette_iou_min", "%.4f") + " | " + cell(r, "spurious_px", "%.0f") + " | " +
+          cell(r, "input_psnr", "%.2f") + " | " + cell(r, "silhouette_iou_min", "%.4f") + " | " + cell(r, "spurious_px", "%.0f") + " | " +
           cell(r, "spurious_pct", "%.3f") + " | " + cell(r, "spurious_blob", "%.0f") + " | " +
           cell(r, "missing_blob", "%.0f") + " | " + cell(r, "components", "%.0f") + " / " +
           cell(r, "hull_components", "%.0f") + " | " + cell(r, "seconds", "%.1f") + " | " + cell(r, "faces", "%.0f") + " | " + cell(r, "mb", "%.2f") + " | " + r["status"].get<std::string>() + " |\n";
@@ -319,6 +319,7 @@ int main(int argc, char** argv) {
           row["psnr"] = m["appearance"]["psnr"];
           row["ssim"] = m["appearance"]["ssim"];
         }
+        if (m["input_view_psnr"].is_object()) row["input_psnr"] = m["input_view_psnr"]["psnr"];
         add_mask_agreement(m["mask_agreement"], row);
         row["faces"] = m["pred"]["faces"];
         row["mb"] = double(fs::file_size(recon)) / 1e6;
@@ -357,7 +358,8 @@ int main(int argc, char** argv) {
               {"notes", notes}};
   std::string md = "# Object benchmark\n\nFrame: " + doc["frame"].get<std::string>() + "; CD-L1, IoU, " + fscore_label +
                    " (also over the GT surface visible from outside; hidden GT = share of GT samples no outside view sees), "
-                   "PSNR, SSIM as defined in docs/evaluation.md; min sil. IoU = the smallest of the four silhouette IoUs against "
+                   "PSNR, SSIM and the input-view PSNR (the mesh rendered in each input view, over its mask) as defined in "
+                   "docs/evaluation.md; min sil. IoU = the smallest of the four silhouette IoUs against "
                    "the input masks that `unique3d reconstruct` prints; spurious px / % / blob = in the worst view, the mesh pixels "
                    "farther than 2 px from the input mask, their share of the mask's area and the largest connected group of "
                    "them; missing blob = the largest group of mask pixels farther than 2 px from the mesh; pieces / hull = "

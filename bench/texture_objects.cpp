@@ -3,8 +3,11 @@
 // `reconstruct` with its defaults: 40k faces, a 2048 texture baked from the views, `eval --given-frame
 // --gt-render-fill 0.9 --views`), printing per object the atlas's charts, its texels used (the share of
 // the texture whose centre a chart triangle covers: the texels baking fills), the UV and baking
-// seconds and the 24-view PSNR and SSIM (renders at --eval-res). Not a Google Benchmark. Usage:
-// bench_texture_objects --help.
+// seconds, the 24-view PSNR and SSIM (renders at --eval-res) and the PSNR in the input views
+// (eval/input_view_psnr.h: the textured mesh rendered in each view at its resolution). The geometry
+// (reconstructed up to the texture, 40k faces) is kept as <out>/<object>/geometry_<res>.ply and, with
+// --reuse-geometry, read back instead of reconstructed, so two builds that differ only in the atlas or
+// the baking compare on the same geometry. Not a Google Benchmark. Usage: bench_texture_objects --help.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
@@ -15,6 +18,7 @@
 #include "eval/evaluate.h"
 #include "io/mesh_io.h"
 #include "isomer/reconstruct.h"
+#include "isomer/texture_bake.h"
 #include "render/render_view.h"
 
 namespace fs = std::filesystem;
@@ -27,6 +31,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> only;
   int resolution = 512;
   int eval_resolution = AppearanceOptions{}.resolution;
+  bool reuse_geometry = false;
   const float fill = 0.9f;
   app.add_option("--objects", objects_dir, "Folder of object folders (each with one mesh file)")->capture_default_str();
   app.add_option("--out", out_dir, "Folder for the rendered views")->capture_default_str();
@@ -34,6 +39,9 @@ int main(int argc, char** argv) {
   app.add_option("--res", resolution, "View resolution")->capture_default_str();
   app.add_option("--eval-res", eval_resolution, "Resolution of the 24 evaluation renders (2x supersampled)")
       ->capture_default_str();
+  app.add_flag("--reuse-geometry", reuse_geometry,
+               "Read each object's geometry from <out>/<object>/geometry_<res>.ply when it is there (a previous "
+               "run wrote it) instead of reconstructing it");
   CLI11_PARSE(app, argc, argv);
   if (!fs::is_directory(objects_dir)) {
     std::printf("bench_texture_objects: no objects folder at %s: nothing to do (skipped)\n", objects_dir.c_str());
@@ -45,8 +53,10 @@ int main(int argc, char** argv) {
       objects.push_back(e.path());
   std::sort(objects.begin(), objects.end());
 
-  std::printf("| object | faces | charts | texels used | UV (s) | baking (s) | PSNR | SSIM |\n|---|---|---|---|---|---|---|---|\n");
-  double psnr_sum = 0;
+  std::printf(
+      "| object | faces | charts | texels used | UV (s) | baking (s) | PSNR | SSIM | input-view PSNR |\n"
+      "|---|---|---|---|---|---|---|---|---|\n");
+  double psnr_sum = 0, input_psnr_sum = 0;
   for (const fs::path& dir : objects) {
     fs::path mesh_path;
     for (const auto& e : fs::directory_iterator(dir))
@@ -65,20 +75,35 @@ int main(int argc, char** argv) {
       save_image(r.normal, views_dir / view_file_name(v, true));
     }
     const ViewSet views = load_view_set(views_dir);
-    const ReconstructResult result = reconstruct(views);
+    // `reconstruct` as it is up to the texture (the same decimation, vertex colours instead), then
+    // the texture baked as `reconstruct` bakes it.
+    ReconstructOptions options;
+    const fs::path geometry_path = fs::path(out_dir) / dir.filename() / ("geometry_" + std::to_string(resolution) + ".ply");
+    if (!reuse_geometry || !fs::exists(geometry_path)) {
+      ReconstructOptions geometry_only = options;
+      geometry_only.color_mode = ColorMode::Vertex;
+      geometry_only.faces = final_face_count(options);
+      Mesh geometry = reconstruct(views, geometry_only).mesh;
+      geometry.colors.clear();
+      write_mesh(geometry, geometry_path);
+    }
+    Mesh mesh = read_mesh(geometry_path);
+    const TextureBakeReport t = bake_texture(mesh, views, options.coloring, options.texture);
     EvalOptions eval;
     eval.normalize = false;
     eval.gt_render_fill = fill;
     eval.appearance_options.resolution = eval_resolution;
-    const EvalReport report = evaluate_meshes(result.mesh, gt, eval, &views);
-    const TextureBakeReport& t = result.texture;
-    const int size = ReconstructOptions{}.texture.atlas.texture_size;
-    std::printf("| %s | %zu | %d | %.1f %% | %.2f | %.2f | %.2f | %.4f |\n", dir.filename().c_str(),
-                result.mesh.face_count(), t.charts, 100.0 * double(t.texels_covered) / (double(size) * size),
-                t.uv_seconds, t.bake_seconds, report.appearance->psnr, report.appearance->ssim);
+    const EvalReport report = evaluate_meshes(mesh, gt, eval, &views);
+    const int size = options.texture.atlas.texture_size;
+    std::printf("| %s | %zu | %d | %.1f %% | %.2f | %.2f | %.2f | %.4f | %.3f |\n", dir.filename().c_str(),
+                mesh.face_count(), t.charts, 100.0 * double(t.texels_covered) / (double(size) * size), t.uv_seconds,
+                t.bake_seconds, report.appearance->psnr, report.appearance->ssim, report.input_view_psnr->mean);
     std::fflush(stdout);
     psnr_sum += report.appearance->psnr;
+    input_psnr_sum += report.input_view_psnr->mean;
   }
-  if (!objects.empty()) std::printf("\nmean PSNR %.3f dB over %zu objects\n", psnr_sum / double(objects.size()), objects.size());
+  if (!objects.empty())
+    std::printf("\nmean PSNR %.3f dB, input-view PSNR %.3f dB over %zu objects\n", psnr_sum / double(objects.size()),
+                input_psnr_sum / double(objects.size()), objects.size());
   return 0;
 }

@@ -76,13 +76,15 @@ const CommandRegistration registration{
           ->capture_default_str()->check(CLI::Range(2, 1024));
       sub.add_option("--render-resolution", a->options.appearance_options.resolution, "Pixels per side of the 24 renders")
           ->capture_default_str()->check(CLI::Range(16, 4096));
-      sub.add_option("--ssaa", a->options.appearance_options.ssaa, "Supersampling per axis of the renders")
+      sub.add_option("--ssaa", a->options.appearance_options.ssaa,
+                     "Supersampling per axis of the renders (the 24 views' and, with --views, the input views')")
           ->capture_default_str()->check(CLI::Range(1, 8));
-      sub.add_flag("--no-appearance", a->no_appearance, "Skip the rendered PSNR/SSIM comparison");
+      sub.add_flag("--no-appearance", a->no_appearance, "Skip the rendered PSNR/SSIM comparisons");
       sub.add_option("--views", a->views_dir,
                      "The view set PRED was reconstructed from (PRED in its frame): count mesh pixels over the masks' "
-                     "background and mask pixels the mesh misses, per view, and compare the mesh's pieces with the "
-                     "masks' visual hull")
+                     "background and mask pixels the mesh misses, per view, compare the mesh's pieces with the "
+                     "masks' visual hull and, with appearance, render PRED in each view at its resolution for its "
+                     "PSNR against the view's RGB over its mask")
           ->check(CLI::ExistingDirectory);
       sub.add_option("--save-renders", a->save_renders, "Write the 2 x 24 renders to this folder");
       sub.add_option("--seed", a->options.seed, "Seed of the surface sampling")->capture_default_str();

@@ -46,6 +46,13 @@ nlohmann::json mask_agreement_json(const MaskAgreement& m) {
           {"views", views}};
 }
 
+nlohmann::json input_view_psnr_json(const InputViewPsnr& p) {
+  nlohmann::json views = nlohmann::json::array();
+  for (View v : kAllViews)
+    views.push_back({{"view", view_name(v)}, {"psnr", p.views[size_t(v)]}, {"pixels", p.pixels[size_t(v)]}});
+  return {{"psnr", p.mean}, {"ssaa", p.ssaa}, {"views", views}};
+}
+
 std::string format(const char* fmt, double value) {
   char buf[64];
   std::snprintf(buf, sizeof buf, fmt, value);
@@ -99,6 +106,7 @@ nlohmann::json report_to_json(const EvalReport& r) {
     j["appearance"] = nullptr;
   }
   j["mask_agreement"] = r.mask_agreement ? mask_agreement_json(*r.mask_agreement) : nlohmann::json(nullptr);
+  j["input_view_psnr"] = r.input_view_psnr ? input_view_psnr_json(*r.input_view_psnr) : nlohmann::json(nullptr);
   j["warnings"] = r.warnings;
   j["seconds"] = {{"geometry", r.geometry_seconds}, {"appearance", r.appearance_seconds}};
   return j;
@@ -128,6 +136,12 @@ std::string report_summary(const EvalReport& r) {
   if (r.appearance) {
     s += "PSNR:           " + format("%.3f", r.appearance->psnr) + " dB  (mean of 24 views)\n";
     s += "SSIM:           " + format("%.4f", r.appearance->ssim) + "\n";
+  }
+  if (r.input_view_psnr) {
+    const InputViewPsnr& p = *r.input_view_psnr;
+    s += "input views:    PSNR " + format("%.3f", p.mean) + " dB where mesh and mask meet (mean of 4;";
+    for (View v : kAllViews) s += std::string(" ") + view_name(v) + " " + format("%.2f", p.views[size_t(v)]);
+    s += ")\n";
   }
   if (r.mask_agreement) {
     const MaskAgreement& m = *r.mask_agreement;

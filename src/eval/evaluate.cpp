@@ -29,6 +29,11 @@ EvalReport evaluate_meshes(Mesh pred, Mesh gt, const EvalOptions& options, const
     StageTimer timer("agreement with the input masks");
     r.mask_agreement = mask_agreement(pred, *input_views, options.mask_agreement);
   }
+  if (input_views && options.appearance) {
+    StageTimer timer("PSNR in the input views");
+    r.input_view_psnr = input_view_psnr(pred, *input_views, options.appearance_options.ssaa);
+    r.appearance_seconds += timer.finish();
+  }
   require(options.gt_render_fill >= 0, "render fill must not be negative");
   require(options.gt_render_fill == 0 || !options.normalize,
           "placing the GT in a render frame only makes sense in the shared frame");
@@ -63,7 +68,7 @@ EvalReport evaluate_meshes(Mesh pred, Mesh gt, const EvalOptions& options, const
     if (!r.gt.has_color) r.warnings.push_back("ground-truth mesh has no colour: it is rendered mid-gray");
     StageTimer appearance_timer("appearance metrics (24 views)");
     r.appearance = appearance_metrics(pred, gt, options.appearance_options, options.save_renders_dir);
-    r.appearance_seconds = appearance_timer.finish();
+    r.appearance_seconds += appearance_timer.finish();
   }
   return r;
 }

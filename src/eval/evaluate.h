@@ -1,7 +1,8 @@
 #pragma once
 // The whole evaluation of a predicted mesh against ground truth (docs/evaluation.md): frame
 // normalization, geometry metrics (Chamfer, F-score, volume IoU), appearance metrics (PSNR, SSIM) and,
-// given the views the prediction was reconstructed from, its agreement with their masks.
+// given the views the prediction was reconstructed from, its agreement with their masks and its PSNR
+// against their RGB images.
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -11,6 +12,7 @@
 #include "eval/appearance.h"
 #include "eval/chamfer.h"
 #include "eval/fscore.h"
+#include "eval/input_view_psnr.h"
 #include "eval/mask_agreement.h"
 #include "eval/mesh_checks.h"
 #include "eval/visible_surface.h"
@@ -59,6 +61,7 @@ struct EvalReport {
   VolumeIou iou;
   std::optional<AppearanceMetrics> appearance;
   std::optional<MaskAgreement> mask_agreement;  // with input views only
+  std::optional<InputViewPsnr> input_view_psnr;  // with input views and appearance only (ssaa of appearance_options)
   std::vector<std::string> warnings;
   double geometry_seconds = 0;
   double appearance_seconds = 0;
@@ -66,8 +69,8 @@ struct EvalReport {
 
 // Throws Error when a mesh is empty or invalid; imperfect meshes (open, degenerate faces, no colour)
 // are evaluated and reported in `warnings`. `input_views` (optional): the views `pred` was
-// reconstructed from, in whose frame it lies; then `mask_agreement` is measured (before any frame
-// transform).
+// reconstructed from, in whose frame it lies; then `mask_agreement` and, with appearance,
+// `input_view_psnr` are measured (before any frame transform).
 EvalReport evaluate_meshes(Mesh pred, Mesh gt, const EvalOptions& options, const ViewSet* input_views = nullptr);
 
 }  // namespace u3d

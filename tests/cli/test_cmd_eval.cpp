@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -117,6 +118,18 @@ TEST_F(CliEval, ViewsGiveTheAgreementWithTheInputMasks) {
                            dir);
   ASSERT_EQ(without.status, 0) << without.output;
   EXPECT_TRUE(nlohmann::json::parse(std::ifstream(dir / "m.json"))["mask_agreement"].is_null());
+  EXPECT_TRUE(nlohmann::json::parse(std::ifstream(dir / "m.json"))["input_view_psnr"].is_null());
+  // With appearance, the PSNR in the input views: the colourless mesh renders mid-gray 0.5 over every
+  // pixel of the masks (the band lies off them), the views' gray is 128/255 in their 8-bit files.
+  CliRun psnr = run_cli("eval " + meshes + " --samples 2000 --iou-resolution 16 --render-resolution 32 --views " +
+                            (dir / "views").string() + " --json " + (dir / "m.json").string(),
+                        dir);
+  ASSERT_EQ(psnr.status, 0) << psnr.output;
+  EXPECT_NE(psnr.output.find("input views:    PSNR 54.151 dB"), std::string::npos) << psnr.output;
+  j = nlohmann::json::parse(std::ifstream(dir / "m.json"));
+  EXPECT_NEAR(j["input_view_psnr"]["psnr"].get<double>(), 20 * std::log10(510.0), 1e-3);
+  EXPECT_EQ(j["input_view_psnr"]["ssaa"].get<int>(), 2);
+  EXPECT_EQ(j["input_view_psnr"]["views"][1]["pixels"].get<int>(), 32 * 32);
 }
 
 // A grid of 10^9 cells (--iou-resolution 1024) runs for minutes: the user is told before it starts.
