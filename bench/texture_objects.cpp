@@ -7,7 +7,8 @@
 // (eval/input_view_psnr.h: the textured mesh rendered in each view at its resolution). The geometry
 // (reconstructed up to the texture, 40k faces) is kept as <out>/<object>/geometry_<res>.ply and, with
 // --reuse-geometry, read back instead of reconstructed, so two builds that differ only in the atlas or
-// the baking compare on the same geometry. Not a Google Benchmark. Usage: bench_texture_objects --help.
+// the baking compare on the same geometry. The textured mesh is evaluated as `reconstruct` writes it
+// (<out>/<object>/textured_<res>.glb, 8 bits a channel). Not a Google Benchmark. Usage: bench_texture_objects --help.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
@@ -87,8 +88,12 @@ int main(int argc, char** argv) {
       geometry.colors.clear();
       write_mesh(geometry, geometry_path);
     }
-    Mesh mesh = read_mesh(geometry_path);
-    const TextureBakeReport t = bake_texture(mesh, views, options.coloring, options.texture);
+    Mesh baked = read_mesh(geometry_path);
+    const TextureBakeReport t = bake_texture(baked, views, options.coloring, options.texture);
+    // Evaluated as `reconstruct` writes it: the texture in 8 bits per channel, read back from a GLB.
+    const fs::path textured_path = fs::path(out_dir) / dir.filename() / ("textured_" + std::to_string(resolution) + ".glb");
+    write_mesh(baked, textured_path);
+    const Mesh mesh = read_mesh(textured_path);
     EvalOptions eval;
     eval.normalize = false;
     eval.gt_render_fill = fill;
