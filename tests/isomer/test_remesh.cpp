@@ -80,48 +80,6 @@ TEST(Remesh, SplitOneEdgeOfAnOctahedron) {
   EXPECT_TRUE(rows.position(12).isApprox(mid));
 }
 
-TEST(Remesh, SplitWithinABudgetTakesTheEdgesLongestAgainstTheirLimit) {
-  // A stretched icosphere: edges along x are the longest. With every edge too long and a budget of 5,
-  // the 5 splits are the 5 edges of largest length over limit, and the mesh stays a closed manifold.
-  Mesh m = make_icosphere(1, 1.f);
-  for (Vec3f& p : m.positions) p.x() *= 3.f;
-  VertexRows rows = tagged_rows(m.positions);
-  std::vector<float> max_len(rows.count(), 0.01f);
-  max_len[0] = 0.02f;  // edges at vertex 0 have a larger limit: they rank lower at equal length
-  std::vector<Vec3i> faces = m.faces;
-  const EdgeTopology t = build_edge_topology(faces, rows.count());
-  std::vector<std::pair<float, int>> ranked;
-  for (size_t e = 0; e < t.edge_count(); ++e) {
-    const int a = t.edge_vertices[e][0], b = t.edge_vertices[e][1];
-    ranked.push_back({-(m.positions[a] - m.positions[b]).norm() / (0.5f * (max_len[a] + max_len[b])), int(e)});
-  }
-  std::sort(ranked.begin(), ranked.end());
-  const size_t original = rows.count();
-  EXPECT_EQ(split_long_edges(rows, faces, t, max_len, 5), 5);
-  ASSERT_EQ(rows.count(), original + 5);
-  EXPECT_EQ(closed_manifold_problem(faces, rows.count()), "");
-  // The new vertices are the chosen edges' midpoints, in edge order.
-  std::vector<int> chosen;
-  for (int k = 0; k < 5; ++k) chosen.push_back(ranked[k].second);
-  std::sort(chosen.begin(), chosen.end());
-  for (int k = 0; k < 5; ++k) {
-    const int a = t.edge_vertices[chosen[k]][0], b = t.edge_vertices[chosen[k]][1];
-    EXPECT_TRUE(rows.position(original + k).isApprox(0.5f * (m.positions[a] + m.positions[b]))) << k;
-  }
-}
-
-TEST(Remesh, PassStopsSplittingAtTheVertexBudget) {
-  Mesh m = make_icosphere(2, 1.f);  // 162 vertices, edges about 0.3
-  VertexRows rows = tagged_rows(m.positions);
-  std::vector<Vec3i> faces = m.faces;
-  std::mt19937 rng(3);
-  const RemeshCounts counts = remesh_pass(rows, faces, std::vector<float>(rows.count(), 0.f),
-                                          std::vector<float>(rows.count(), 0.05f), false, rng, 200);
-  EXPECT_EQ(counts.splits, 38);
-  EXPECT_EQ(rows.count(), 200u);
-  EXPECT_EQ(closed_manifold_problem(faces, rows.count()), "");
-}
-
 TEST(Remesh, CollapseRemovesShortEdgesAndKeepsTheManifold) {
   Mesh m = make_icosphere(2, 1.f);
   VertexRows rows = tagged_rows(m.positions);

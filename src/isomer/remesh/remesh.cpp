@@ -35,11 +35,8 @@ RemeshCounts remesh_pass(VertexRows& rows, std::vector<Vec3i>& faces, std::vecto
   RemeshCounts counts;
   counts.collapses = collapse_short_edges(rows, faces, topology.of(faces, rows.count()), min_edge_length, rng);
   if (counts.collapses > 0) topology.invalidate();
-  // Collapses leave their removed vertices' rows until the renumbering below: one per collapse.
-  const size_t live = rows.count() - size_t(counts.collapses);
-  if (live < max_vertices) {
-    counts.splits =
-        split_long_edges(rows, faces, topology.of(faces, rows.count()), max_edge_length, max_vertices - live);
+  if (rows.count() < max_vertices) {
+    counts.splits = split_long_edges(rows, faces, topology.of(faces, rows.count()), max_edge_length);
     if (counts.splits > 0) topology.invalidate();
   }
   // Collapses leave their removed vertices unreferenced: renumbering invalidates the topology too.

@@ -18,9 +18,8 @@ struct RemeshCounts {
 };
 
 // min/max_edge_length are per vertex (consumed). Rows of removed vertices disappear and rows keep
-// following their vertices. Splits stop at max_vertices vertices (the longest edges first when the
-// budget runs out). `cache`, if given, holds the topology of `faces` between passes (the caller must not
-// edit the faces in between).
+// following their vertices. No splits once the mesh has max_vertices vertices. `cache`, if given, holds
+// the topology of `faces` between passes (the caller must not edit the faces in between).
 RemeshCounts remesh_pass(VertexRows& rows, std::vector<Vec3i>& faces, std::vector<float> min_edge_length,
                          std::vector<float> max_edge_length, bool flip, std::mt19937& rng,
                          size_t max_vertices = 1000000, TopologyCache* cache = nullptr);

@@ -1,39 +1,19 @@
 #include "isomer/remesh/split.h"
 
-#include <algorithm>
-#include <utility>
-
 #include "geometry/edge_topology.h"
 
 namespace u3d {
 
 int split_long_edges(VertexRows& rows, std::vector<Vec3i>& faces, const EdgeTopology& t,
-                     std::vector<float>& max_edge_length, size_t max_splits) {
-  // Each too-long edge with its length over its limit.
-  std::vector<std::pair<float, int>> long_edges;
-  std::vector<float> limits(t.edge_count());
-  for (size_t e = 0; e < t.edge_count(); ++e) {
-    const int a = t.edge_vertices[e][0], b = t.edge_vertices[e][1];
-    limits[e] = 0.5f * (max_edge_length[a] + max_edge_length[b]);
-    const float length = (rows.position(a) - rows.position(b)).norm();
-    if (length > limits[e]) long_edges.push_back({length / limits[e], int(e)});
-  }
-  if (long_edges.size() > max_splits) {
-    // The longest against their limits first, then by edge index: a strict order, so the choice does not
-    // depend on the selection algorithm. Back into edge order for the midpoints' numbering.
-    auto first = [](const std::pair<float, int>& x, const std::pair<float, int>& y) {
-      return x.first != y.first ? x.first > y.first : x.second < y.second;
-    };
-    std::nth_element(long_edges.begin(), long_edges.begin() + ptrdiff_t(max_splits), long_edges.end(), first);
-    long_edges.resize(max_splits);
-    std::sort(long_edges.begin(), long_edges.end(), [](const auto& x, const auto& y) { return x.second < y.second; });
-  }
+                     std::vector<float>& max_edge_length) {
   std::vector<int> midpoint(t.edge_count(), -1);
   int splits = 0;
-  for (const auto& [ratio, e] : long_edges) {
+  for (size_t e = 0; e < t.edge_count(); ++e) {
     const int a = t.edge_vertices[e][0], b = t.edge_vertices[e][1];
+    const float limit = 0.5f * (max_edge_length[a] + max_edge_length[b]);
+    if ((rows.position(a) - rows.position(b)).norm() <= limit) continue;
     midpoint[e] = rows.append_mean(a, b);
-    max_edge_length.push_back(limits[e]);
+    max_edge_length.push_back(limit);
     ++splits;
   }
   if (splits == 0) return 0;
