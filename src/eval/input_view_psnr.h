@@ -28,9 +28,9 @@ namespace u3d {
 
 struct InputViewPsnr {
   int ssaa = 0;
-  std::array<double, 4> views{};         // PSNR (dB) per view, indexed by int(View)
+  std::array<double, 4> views{};   // PSNR (dB) per view, indexed by int(View)
   std::array<size_t, 4> pixels{};  // the pixels each view's PSNR is taken over (in both masks)
-  double mean = 0;                       // mean of the four
+  double mean = 0;                 // mean of the four
 };
 
 // Throws Error when ssaa is outside [1, 8].
