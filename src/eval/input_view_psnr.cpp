@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "core/error.h"
 #include "eval/image_metrics.h"
@@ -18,6 +19,8 @@ InputViewPsnr input_view_psnr(const Mesh& mesh, const ViewSet& views, int ssaa) 
   result.ssaa = ssaa;
   for (View v : kAllViews) {
     const Image& rgb = views[v].rgb;
+    require(rgb.channels == 4 && rgb.width == rgb.height && !rgb.empty(),
+            std::string("input-view PSNR: the ") + view_name(v) + " image must be square RGBA");
     Camera camera = view_camera(v, rgb.width);
     camera.width *= ssaa;
     camera.height *= ssaa;
