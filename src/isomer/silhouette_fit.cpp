@@ -107,11 +107,11 @@ Mesh fitted_surface(const ScalarGrid& field, size_t target_faces) {
   return decimate_closed_mesh(surface, target_faces);
 }
 
-// The Chebyshev distance (in samples) of every sample of an n^3 grid to the nearest marked one, capped
-// at `cap`: a one-dimensional pass along each axis in turn.
-std::vector<uint8_t> chebyshev_distance(const std::vector<uint8_t>& marked, int n, int cap) {
-  std::vector<uint8_t> distance(marked.size()), next(marked.size());
-  for (size_t i = 0; i < marked.size(); ++i) distance[i] = marked[i] ? 0 : uint8_t(cap);
+// A separable filter of an n^3 grid, one axis at a time: each sample becomes the fold, by
+// combine(best, value, offset), of the samples within `reach` of it along the axis, starting from its own.
+template <typename T, typename Combine>
+void filter_along_axes(std::vector<T>& values, int n, int reach, Combine combine) {
+  std::vector<T> next(values.size());
   const size_t stride[3] = {1, size_t(n), size_t(n) * size_t(n)};
   for (int axis = 0; axis < 3; ++axis) {
     const size_t across_a = stride[axis == 0 ? 1 : 0], across_b = stride[axis == 2 ? 1 : 2];
@@ -119,37 +119,32 @@ std::vector<uint8_t> chebyshev_distance(const std::vector<uint8_t>& marked, int 
     for (int line = 0; line < n * n; ++line) {
       const size_t base = size_t(line % n) * across_a + size_t(line / n) * across_b;
       for (int i = 0; i < n; ++i) {
-        int best = distance[base + size_t(i) * stride[axis]];
-        for (int j = std::max(0, i - cap + 1); j < std::min(n, i + cap); ++j)
-          best = std::min(best, std::max(std::abs(i - j), int(distance[base + size_t(j) * stride[axis]])));
-        next[base + size_t(i) * stride[axis]] = uint8_t(best);
-      }
-    }
-    distance.swap(next);
-  }
-  return distance;
-}
-
-// Grey-scale dilation (take_max) or erosion of an n^3 grid by a cube of radius r, an axis at a time.
-void cube_filter(std::vector<float>& values, int n, int r, bool take_max) {
-  std::vector<float> next(values.size());
-  const size_t stride[3] = {1, size_t(n), size_t(n) * size_t(n)};
-  for (int axis = 0; axis < 3; ++axis) {
-    const size_t across_a = stride[axis == 0 ? 1 : 0], across_b = stride[axis == 2 ? 1 : 2];
-#pragma omp parallel for schedule(static)
-    for (int line = 0; line < n * n; ++line) {
-      const size_t base = size_t(line % n) * across_a + size_t(line / n) * across_b;
-      for (int i = 0; i < n; ++i) {
-        float best = values[base + size_t(i) * stride[axis]];
-        for (int j = std::max(0, i - r); j <= std::min(n - 1, i + r); ++j) {
-          const float v = values[base + size_t(j) * stride[axis]];
-          best = take_max ? std::max(best, v) : std::min(best, v);
-        }
+        T best = values[base + size_t(i) * stride[axis]];
+        for (int j = std::max(0, i - reach); j <= std::min(n - 1, i + reach); ++j)
+          best = combine(best, values[base + size_t(j) * stride[axis]], std::abs(i - j));
         next[base + size_t(i) * stride[axis]] = best;
       }
     }
     values.swap(next);
   }
+}
+
+// The Chebyshev distance (in samples) of every sample of an n^3 grid to the nearest marked one, capped
+// at `cap`.
+std::vector<uint8_t> chebyshev_distance(const std::vector<uint8_t>& marked, int n, int cap) {
+  std::vector<uint8_t> distance(marked.size());
+  for (size_t i = 0; i < marked.size(); ++i) distance[i] = marked[i] ? 0 : uint8_t(cap);
+  filter_along_axes(distance, n, cap - 1, [](uint8_t best, uint8_t value, int offset) {
+    return uint8_t(std::min(int(best), std::max(offset, int(value))));
+  });
+  return distance;
+}
+
+// Grey-scale dilation (take_max) or erosion of an n^3 grid by a cube of radius r.
+void cube_filter(std::vector<float>& values, int n, int r, bool take_max) {
+  filter_along_axes(values, n, r, [take_max](float best, float value, int) {
+    return take_max ? std::max(best, value) : std::min(best, value);
+  });
 }
 
 // The initial mesh's signed distance on the hull's grid, its pieces joined across the gaps between them
