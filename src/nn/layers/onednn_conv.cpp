@@ -80,9 +80,11 @@ struct OnednnConv2d::State {
     dnnl::primitive_attr attr;
     attr.set_scratchpad_mode(dnnl::scratchpad_mode::user);
     dnnl::convolution_forward::primitive_desc pd(descriptor, attr, onednn_cpu_engine());
-    if (output[2] * output[3] <= kSmallOutput) {
+    if (output[2] * output[3] <= kSmallOutput && std::string(pd.impl_info_str()).find("amx") == std::string::npos) {
       // oneDNN's first choice (brgconv) is slower there than its older direct kernel (bf16, 1,280 channels
-      // at 4x4, batch 8: 7.0 against 5.1 ms; fp32 about twice as slow). next_impl() moves the descriptor
+      // at 4x4, batch 8: 7.0 against 5.1 ms; fp32 about twice as slow), except where it runs on AMX tiles,
+      // which the direct kernel does not use (Intel Xeon since Sapphire Rapids: the 4x4 convolutions of
+      // a bf16 UNet forward, batch 8, at 203 GFLOP/s against 138). next_impl() moves the descriptor
       // itself along the list, so without that kernel the list is walked again from its start.
       const char* direct = type == DataType::bf16 ? "jit_bf16:" : "jit:";
       bool found = false;
