@@ -1,5 +1,6 @@
 #include "core/image.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iterator>
@@ -105,6 +106,23 @@ Image resize_image(const Image& image, int width, int height) {
   int interp = (width < image.width) ? cv::INTER_AREA : cv::INTER_LINEAR;
   cv::resize(to_mat(image), dst, cv::Size(width, height), 0, 0, interp);
   return from_mat_float(dst);
+}
+
+Image resize_premultiplied(const Image& rgba, int width, int height) {
+  require(rgba.channels == 4, "resize_premultiplied: the image must be RGBA");
+  Image premultiplied(rgba.width, rgba.height, 4);
+  for (size_t p = 0; p < rgba.pixel_count(); ++p) {
+    const float* in = rgba.data.data() + p * 4;
+    float* out = premultiplied.data.data() + p * 4;
+    for (int c = 0; c < 3; ++c) out[c] = in[c] * in[3];
+    out[3] = in[3];
+  }
+  Image small = resize_image(premultiplied, width, height);
+  for (size_t p = 0; p < small.pixel_count(); ++p) {
+    const float a = small.data[p * 4 + 3];
+    for (int c = 0; c < 3; ++c) small.data[p * 4 + c] = a > 1e-6f ? std::min(1.f, small.data[p * 4 + c] / a) : 0.f;
+  }
+  return small;
 }
 
 }  // namespace u3d

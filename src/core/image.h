@@ -44,4 +44,9 @@ Image quantized_8bit(const Image& image);
 // Bilinear/area resize (OpenCV INTER_AREA when shrinking, INTER_LINEAR when enlarging).
 Image resize_image(const Image& image, int width, int height);
 
+// resize_image of an RGBA image with its colour weighted by alpha (premultiplied, resized, divided by the
+// resized alpha again; 0 where that is 0 or below 1e-6), so the colour of transparent pixels does not
+// bleed into the object's edges. Throws Error unless the image has 4 channels.
+Image resize_premultiplied(const Image& rgba, int width, int height);
+
 }  // namespace u3d

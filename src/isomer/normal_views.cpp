@@ -53,19 +53,7 @@ NormalViews at_resolution(const NormalViews& views, int max_resolution) {
     }
     const float scale = float(max_resolution) / float(longer);
     const int w = std::max(1, int(std::lround(map.width * scale))), h = std::max(1, int(std::lround(map.height * scale)));
-    Image premultiplied(map.width, map.height, 4);
-    for (size_t p = 0; p < map.pixel_count(); ++p) {
-      const float* in = map.data.data() + p * 4;
-      float* px = premultiplied.data.data() + p * 4;
-      for (int c = 0; c < 3; ++c) px[c] = in[c] * in[3];
-      px[3] = in[3];
-    }
-    Image small = resize_image(premultiplied, w, h);
-    for (size_t p = 0; p < small.pixel_count(); ++p) {
-      const float a = small.data[p * 4 + 3];
-      for (int c = 0; c < 3; ++c) small.data[p * 4 + c] = a > 1e-6f ? std::min(1.f, small.data[p * 4 + c] / a) : 0.f;
-    }
-    out.normal_maps[size_t(i)] = std::move(small);
+    out.normal_maps[size_t(i)] = resize_premultiplied(map, w, h);
     // The projection maps to normalized device coordinates: only the pixel grid changes.
     out.cameras[size_t(i)].width = w;
     out.cameras[size_t(i)].height = h;

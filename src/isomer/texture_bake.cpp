@@ -146,20 +146,21 @@ TextureBakeReport bake_texture(Mesh& mesh, const ViewSet& views, const ColoringO
 #pragma omp section
     try {
       // The vertex colouring, from the views at the visibility raster's resolution (it only fills what
-      // the views barely see; at 2048 px it would cost more than the texels).
+      // the views barely see; at 2048 px it would cost more than the texels), reduced with alpha weights
+      // so the background's colour does not bleed into the rim's vertices.
       ViewSet reduced;
       for (View v : kAllViews) {
         const Image& rgb = views[v].rgb;
+        require(rgb.channels == 4 && rgb.width > 1 && rgb.height > 1,
+                std::string("texture baking: the ") + view_name(v) + " image must be RGBA");
         const int r = std::min(rgb.width, target.raster_resolution);
-        reduced[v].rgb = r < rgb.width ? resize_image(rgb, r, r) : rgb;
+        reduced[v].rgb = r < rgb.width ? resize_premultiplied(rgb, r, r) : rgb;
       }
       report.vertices = color_mesh(vertex_colored, reduced, coloring);
       for (View v : kAllViews) {
         const float view_weight = target.view_weights[size_t(v)];
         if (view_weight <= 0.f) continue;
         const Image& image = views[v].rgb;
-        require(image.channels == 4 && image.width > 1 && image.height > 1,
-                std::string("texture baking: the ") + view_name(v) + " image must be RGBA");
         const Camera cam = view_camera(v, image.width);
         sampled.push_back({&image, eroded_mask(image, coloring.mask_erosion_px), cam, cam.toward_camera(),
                            rasterize(mesh, view_camera(v, target.raster_resolution)), view_weight});

@@ -87,6 +87,33 @@ TEST(Image, Quantized8BitIsWhatThePngGivesBack) {
   }
 }
 
+// An opaque red half beside a transparent half whose colour is blue: shrunk, the pixels that straddle
+// the edge are part red and part transparent; resize_premultiplied keeps them red (resize_image turns
+// them purple), gives the alpha resize_image gives, and colour 0 where nothing is opaque.
+TEST(Image, ResizePremultipliedKeepsTheBackgroundsColourOutOfTheEdge) {
+  Image im(8, 4, 4, 0.f);
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 8; ++x) {
+      const bool red = x < 3;
+      im.at(x, y, 0) = red ? 1.f : 0.f;
+      im.at(x, y, 2) = red ? 0.f : 1.f;
+      im.at(x, y, 3) = red ? 1.f : 0.f;
+    }
+  const Image plain = resize_image(im, 4, 2), small = resize_premultiplied(im, 4, 2);
+  ASSERT_EQ(small.channels, 4);
+  ASSERT_EQ(small.width, 4);
+  for (int y = 0; y < 2; ++y)
+    for (int x = 0; x < 4; ++x) {
+      EXPECT_FLOAT_EQ(small.at(x, y, 3), plain.at(x, y, 3));
+      const bool some_red = small.at(x, y, 3) > 0.f;
+      EXPECT_FLOAT_EQ(small.at(x, y, 0), some_red ? 1.f : 0.f) << x;
+      EXPECT_FLOAT_EQ(small.at(x, y, 2), 0.f) << x;
+    }
+  EXPECT_FLOAT_EQ(small.at(1, 0, 3), 0.5f);   // the straddling pixel: half opaque
+  EXPECT_FLOAT_EQ(plain.at(1, 0, 2), 0.5f);   // where resize_image mixes in the blue
+  EXPECT_THROW(resize_premultiplied(Image(4, 4, 3), 2, 2), Error);
+}
+
 TEST(Image, RgbChannelOrderIsRgb) {
   Image im(1, 1, 3);
   im.at(0, 0, 0) = 1.f;  // pure red

@@ -4,15 +4,18 @@
 // and the GLB round trip keeps it; texels used is the share of texels baking fills.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "core/error.h"
 #include "core/synthetic_views.h"
 #include "geometry/icosphere.h"
+#include "geometry/test_shapes.h"
 #include "io/image_codec.h"
 #include "io/mesh_io.h"
 #include "isomer/texture_bake.h"
@@ -141,6 +144,47 @@ TEST(TextureBake, GlbTexturesFollowTheGltfUvConvention) {
     const Image after = render_view(read, view_camera(View::Front, 256)).rgb;
     EXPECT_LT(mean_error(before, after), format == TextureFormat::Png ? 0.003 : 0.01) << path;
   }
+}
+
+// A box, each triangle split into four at its edges' midpoints `levels` times (shared vertices).
+Mesh subdivided_box(const Vec3f& lo, const Vec3f& hi, int levels) {
+  Mesh m = test::box_mesh(lo, hi);
+  for (int l = 0; l < levels; ++l) {
+    std::map<std::pair<int, int>, int> midpoint;
+    auto mid = [&](int a, int b) {
+      const auto key = std::minmax(a, b);
+      if (const auto it = midpoint.find(key); it != midpoint.end()) return it->second;
+      m.positions.push_back(0.5f * (m.positions[size_t(a)] + m.positions[size_t(b)]));
+      return midpoint[key] = int(m.positions.size()) - 1;
+    };
+    std::vector<Vec3i> faces;
+    for (const Vec3i& f : m.faces) {
+      const int a = mid(f[0], f[1]), b = mid(f[1], f[2]), c = mid(f[2], f[0]);
+      faces.insert(faces.end(), {Vec3i(f[0], a, c), Vec3i(a, f[1], b), Vec3i(c, b, f[2]), Vec3i(a, b, c)});
+    }
+    m.faces = std::move(faces);
+  }
+  return m;
+}
+
+// Views larger than the visibility raster (2048 px in the pipeline) are reduced for the vertex
+// colouring that faint texels fade toward; the background's colour must not bleed into the object's
+// rim there. A gray box on black whose sides end inside a 2x2 block of pixels (a reduced pixel at the
+// rim is half box, half background), the mesh a box within a pixel of the reduced views inside it, so
+// its rim vertices read that pixel: its top and bottom, which no view sees, take their colour from the
+// rim's vertices, and every texel must be the views' gray (before, they came out darker).
+TEST(TextureBake, BackgroundDoesNotBleedIntoTheRimOfViewsLargerThanTheRaster) {
+  const Vec3f lo(-0.3995f, -0.4995f, -0.2995f), hi(0.3995f, 0.4995f, 0.2995f), inset(0.0015f, 0.0015f, 0.0015f);
+  const ViewSet large = testing::boxes_views({{lo, hi}}, 2048);
+  Mesh mesh = subdivided_box(lo + inset, hi - inset, 4);
+  TextureBakeOptions options;
+  options.atlas.texture_size = 256;
+  const TextureBakeReport report = bake_texture(mesh, large, {}, options);
+  ASSERT_LT(report.texels_confident, report.texels_covered);  // some texels fade toward the vertex colours
+  const Image& texture = mesh.materials[0].texture;
+  float worst = 0.f;
+  for (float value : texture.data) worst = std::max(worst, std::abs(value - 0.5f));
+  EXPECT_LT(worst, 1e-5f);
 }
 
 TEST(TextureBake, RejectsBadOptions) {
