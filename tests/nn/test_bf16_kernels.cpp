@@ -111,7 +111,9 @@ TEST(Bf16Kernels, ConvolutionPackedInPlaceGivesTheSameValues) {
   U3D_SKIP_UNLESS_BF16_KERNELS();
   torch::NoGradGuard no_grad;
   torch::manual_seed(18);
-  // 16 and 32 channels: the packed layouts fit in the weights' own bytes. 3 input channels: they do not.
+  // 16 and 32 channels: the packed layouts fit in the weights' own bytes. 3 output channels: they do not
+  // (blocked layouts pad the output channels to 16). 3 input channels fit on some CPUs and not on others
+  // (on AMX the kernel's layout leaves them unpadded).
   const auto make = [] {
     torch::nn::Sequential model(Conv2d(16, 32, 3, 1, 1, true, torch::TensorOptions()),
                                 Conv2d(32, 32, 3, 1, 1, false, torch::TensorOptions()),
@@ -137,11 +139,11 @@ TEST(Bf16Kernels, ConvolutionPackedInPlaceGivesTheSameValues) {
   // The same kernels on the same packed values: the same result, and again on the next call.
   EXPECT_TRUE(torch::equal(in_place->forward(x), expected));
   EXPECT_TRUE(torch::equal(in_place->forward(x), expected));
-  // The first two layers' weights now hold the packed layout in their own storage; the others kept theirs.
+  // The first two layers' weights now hold the packed layout in their own storage; the third kept its own.
   EXPECT_EQ(weight(in_place, 0).data_ptr(), storage);
   EXPECT_FALSE(torch::equal(weight(in_place, 0), weight(separate, 0)));
   EXPECT_FALSE(torch::equal(weight(in_place, 1), weight(separate, 1)));
-  EXPECT_TRUE(torch::equal(weight(in_place, 3), weight(separate, 3)));
+  EXPECT_TRUE(torch::equal(weight(in_place, 2), weight(separate, 2)));
   // Another input size gets its own plan from the packed values.
   const torch::Tensor larger = torch::randn({1, 16, 11, 5}).to(torch::kBFloat16);
   EXPECT_TRUE(torch::equal(in_place->forward(larger), separate->forward(larger)));

@@ -164,7 +164,9 @@ TEST(Matting, RealIsNetFindsTheSubjectOfThreePhotos) {
       const double raw_iou = iou(mask), solid_iou = iou(solid);
       std::printf("  %s over a %s background: mask IoU %.4f, made solid %.4f\n", name, backdrop, raw_iou, solid_iou);
       EXPECT_GE(raw_iou, 0.95);
-      EXPECT_GE(solid_iou, raw_iou);  // made solid, the masks find the subjects no worse
+      // Made solid, the masks find the subjects no worse, up to a few edge pixels that depend on the
+      // CPU's bf16 kernels (an AMX host: aaa over clutter 0.99136 made solid against 0.99140 raw).
+      EXPECT_GE(solid_iou, raw_iou - 1e-4);
       save_image(to_image(composite), out_dir / (std::string(name) + "_" + backdrop + "_input.png"));
       save_image(to_image(mask), out_dir / (std::string(name) + "_" + backdrop + "_matte.png"));
     }

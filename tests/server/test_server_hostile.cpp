@@ -222,7 +222,11 @@ TEST(ServerHostile, FiftyConcurrentSubmissionsAgainstAQueueOfEight) {
   for (int i = 0; i < 50; ++i)
     threads.emplace_back([&] {
       httplib::Client c("127.0.0.1", server.port());
-      c.set_read_timeout(120, 0);  // the uploads are checked one at a time
+      // The uploads are checked one at a time, so the last ones wait: for the answer, and to send their
+      // bodies while earlier ones are read (httplib's default write timeout, 5 s, was too short on a
+      // slower machine: "Write", the client giving up, not the server).
+      c.set_read_timeout(120, 0);
+      c.set_write_timeout(120, 0);
       auto res = c.Post("/api/jobs", example_upload());
       if (res && res->status == 202) {
         ++accepted;
