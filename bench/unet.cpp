@@ -68,7 +68,7 @@ UNet2DConditionModel& full_size_unet(std::map<int64_t, Case>& cases) {
     if (!g_check) {
       UNet2DConditionModel m = build_unet(scalar_type(g_precision));
       set_precision(*m, g_precision);
-      pack_conv_weights_in_place(*m);  // as the pipelines' loaders do: the weights held once
+      pack_weights_in_place(*m);  // as the pipelines' loaders do: the weights held once
       return m;
     }
     UNet2DConditionModel m = build_unet(torch::kFloat);

@@ -194,7 +194,7 @@ int main(int argc, char** argv) try {
     UNet2DConditionModel unet(manifest_config("unet_unique3d_img2mvimg"), options);
     randomize_parameters(*unet, 0.02);
     set_precision(*unet, precision);
-    pack_conv_weights_in_place(*unet);  // as the pipeline's loaders
+    pack_weights_in_place(*unet);  // as the pipeline's loaders
     set_attention_processors(*unet, self_attention_only(std::make_shared<MultiViewAttentionProcessor>(4)));
     torch::Tensor x = torch::randn({4, 4, 32, 32}), context = torch::randn({8, 1, 768});
     torch::Tensor condition = torch::randn({2, 4, 32, 32});
@@ -215,7 +215,7 @@ int main(int argc, char** argv) try {
     ReferenceUNet model(manifest_config("unet_unique3d_image2normal"), options);
     randomize_parameters(*model.unet, 0.02);  // the reference UNet is registered inside it
     set_precision(*model.unet, precision);
-    pack_conv_weights_in_place(*model.unet);
+    pack_weights_in_place(*model.unet);
     // As the pipeline: the unconditional half's context and condition latents are zeros.
     torch::Tensor x = torch::randn({4, 4, 64, 64});
     torch::Tensor context = torch::cat({torch::zeros({4, 1, 768}), torch::randn({4, 1, 768})});
@@ -242,7 +242,7 @@ int main(int argc, char** argv) try {
                                  static_cast<torch::nn::Module*>(controlnet.get())}) {
       randomize_parameters(*m, 0.02);
       set_precision(*m, precision);
-      pack_conv_weights_in_place(*m);
+      pack_weights_in_place(*m);
     }
     torch::Tensor x = torch::randn({2, 4, 128, 128}), text = torch::randn({2, 77, 768});
     torch::Tensor context = adapter->context(text, torch::randn({2, 1024}));

@@ -21,12 +21,15 @@
 // In glibc's heap the large blocks left holes that later blocks of other sizes could not use: a fp32
 // refinement step at 1024 px held about 1 GiB more than its live tensors that way (docs/networks.md,
 // "Memory"). Mapping each of them anew instead (a lower M_MMAP_THRESHOLD) faults their pages in again
-// every time: the same step took 180 s against 149 s in one run each.
+// every time: the same step took 180 s against 149 s in one run each. Until 2026-12-07 the bound was
+// 8 MiB, and the blocks of 1-8 MiB (a bf16 normal step's 32x32 and 16x16 activations, 2.6-5.2 MiB) came
+// from the heap, where they left holes of the same kind: with 1 MiB that step's peak RSS went from 4.03
+// to 3.80 GB (docs/networks.md, "Memory").
 #include <cstddef>
 
 namespace u3d::nn {
 
-constexpr size_t kLargeBlockBytes = size_t{8} << 20;
+constexpr size_t kLargeBlockBytes = size_t{1} << 20;
 constexpr size_t kLargeBlockCacheBytes = size_t{128} << 20;
 
 // Makes this allocator libtorch's CPU allocator. Idempotent; tensors allocated before keep their own

@@ -131,7 +131,7 @@ TEST(Bf16Kernels, ConvolutionPackedInPlaceGivesTheSameValues) {
     if (const torch::Tensor bias = separate[i]->as<Conv2dImpl>()->bias; bias.defined())
       in_place[i]->as<Conv2dImpl>()->bias.copy_(bias);
   }
-  pack_conv_weights_in_place(*in_place);
+  pack_weights_in_place(*in_place);
   const void* storage = weight(in_place, 0).data_ptr();
 
   const torch::Tensor x = torch::randn({2, 16, 8, 8}).to(torch::kBFloat16);
@@ -322,7 +322,7 @@ TEST(Fp32Kernels, ConvolutionPackedInPlaceGivesTheSameValues) {
   for (size_t i = 0; i < separate->size(); ++i)
     for (const auto& item : separate[i]->named_parameters())
       in_place[i]->named_parameters()[item.key()].copy_(item.value());
-  pack_conv_weights_in_place(*in_place);
+  pack_weights_in_place(*in_place);
   const torch::Tensor x = torch::randn({2, 16, 8, 8});
   const torch::Tensor expected = separate->forward(x);
   EXPECT_TRUE(torch::equal(in_place->forward(x), expected));

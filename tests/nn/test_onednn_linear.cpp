@@ -4,7 +4,9 @@
 #include <torch/torch.h>
 
 #include "nn/layers/layers.h"
+#include "nn/precision.h"
 #include "nn/runtime.h"
+#include "required_skip.h"
 
 namespace u3d::nn {
 namespace {
@@ -14,35 +16,113 @@ double relative_max_error(const torch::Tensor& a, const torch::Tensor& b) {
   return ((a.to(torch::kDouble) - b).abs().max() / b.abs().max()).item<double>();
 }
 
-TEST(OnednnLinear, MatchesFloat64) {
-  if (!cpu_runs_avx512_kernels()) GTEST_SKIP() << "fp32 linear layers take ATen's path on this CPU";
+torch::Tensor reference(const torch::Tensor& x, const torch::Tensor& weight, const torch::Tensor& bias) {
+  return torch::linear(x.to(torch::kDouble), weight.to(torch::kDouble),
+                       bias.defined() ? bias.to(torch::kDouble) : torch::Tensor());
+}
+
+// Odd sizes, with and without bias, a strided (transposed) input and a single row, against float64 of the
+// same (rounded) inputs; bf16 results are rounded once, so within 2^-8 of the largest value.
+void check_against_float64(torch::ScalarType type, double tolerance) {
+  torch::NoGradGuard no_grad;
   torch::manual_seed(3);
-  // A 3-D input of odd sizes, with and without bias, and a strided (transposed) input.
-  const torch::Tensor x = torch::randn({3, 37, 70});
-  const torch::Tensor weight = torch::randn({45, 70}) * 0.1, bias = torch::randn({45});
-  const torch::Tensor reference = torch::linear(x.to(torch::kDouble), weight.to(torch::kDouble), bias.to(torch::kDouble));
-  const torch::Tensor out = onednn_linear(x, weight, bias);
+  const torch::Tensor x = torch::randn({3, 37, 70}).to(type);
+  const torch::Tensor weight = (torch::randn({45, 70}) * 0.1).to(type), bias = torch::randn({45}).to(type);
+  ASSERT_TRUE(OnednnLinear::applies(x, weight));
+  OnednnLinear linear;
+  const torch::Tensor out = linear.forward(x, weight, bias);
   ASSERT_EQ(out.sizes(), (std::vector<int64_t>{3, 37, 45}));
-  EXPECT_LT(relative_max_error(out, reference), 1e-6);
-  const torch::Tensor no_bias = onednn_linear(x, weight, {});
-  EXPECT_LT(relative_max_error(no_bias, torch::linear(x.to(torch::kDouble), weight.to(torch::kDouble))), 1e-6);
-  const torch::Tensor strided = torch::randn({70, 11}).t();
-  EXPECT_LT(relative_max_error(onednn_linear(strided, weight, bias),
-                               torch::linear(strided.to(torch::kDouble), weight.to(torch::kDouble),
-                                             bias.to(torch::kDouble))),
-            1e-6);
+  EXPECT_EQ(out.scalar_type(), type);
+  EXPECT_LT(relative_max_error(out, reference(x, weight, bias)), tolerance);
+  OnednnLinear no_bias;
+  EXPECT_LT(relative_max_error(no_bias.forward(x, weight, {}), reference(x, weight, {})), tolerance);
+  const torch::Tensor strided = torch::randn({70, 11}).to(type).t();
+  EXPECT_LT(relative_max_error(linear.forward(strided, weight, bias), reference(strided, weight, bias)), tolerance);
   // A single row: the output is a new tensor, the bias is left as it was.
   const torch::Tensor bias_before = bias.clone();
   const torch::Tensor row = x.narrow(0, 0, 1).narrow(1, 0, 1);
-  EXPECT_LT(relative_max_error(onednn_linear(row, weight, bias),
-                               torch::linear(row.to(torch::kDouble), weight.to(torch::kDouble), bias.to(torch::kDouble))),
-            1e-6);
+  EXPECT_LT(relative_max_error(linear.forward(row, weight, bias), reference(row, weight, bias)), tolerance);
   EXPECT_TRUE(torch::equal(bias, bias_before));
-  // The Linear layer takes this path for fp32.
-  Linear layer(70, 45, true, torch::TensorOptions());
-  layer->weight.data().copy_(weight);
-  layer->bias.data().copy_(bias);
+  // The first row count's plan still answers.
+  EXPECT_TRUE(torch::equal(linear.forward(x, weight, bias), out));
+  // An fp32 bias is added before the rounding.
+  OnednnLinear fp32_bias;
+  const torch::Tensor bias32 = torch::randn({45});
+  EXPECT_LT(relative_max_error(fp32_bias.forward(x, weight, bias32), reference(x, weight, bias32)), tolerance);
+  // The Linear layer takes this path.
+  Linear layer(70, 45, true, torch::TensorOptions().dtype(type));
+  layer->weight.copy_(weight);
+  layer->bias.copy_(bias);
   EXPECT_TRUE(torch::equal(layer->forward(x), out));
+}
+
+TEST(OnednnLinear, Fp32MatchesFloat64) {
+  if (!cpu_runs_avx512_kernels()) GTEST_SKIP() << "fp32 linear layers take ATen's path on this CPU";
+  check_against_float64(torch::kFloat, 1e-6);
+}
+
+TEST(OnednnLinear, Bf16MatchesFloat64) {
+  U3D_SKIP_UNLESS_BF16_KERNELS();
+  check_against_float64(torch::kBFloat16, 1.0 / 256);
+}
+
+// Packed into their own storage, the weights give what the plain weights give (the same kernel, the same
+// products: equal here), for every row count; new values copied in are packed again; a path that would
+// read the packed bytes as plain weights refuses.
+void check_packed_in_place(torch::ScalarType type) {
+  torch::NoGradGuard no_grad;
+  torch::manual_seed(11);
+  const torch::TensorOptions options = torch::TensorOptions().dtype(type);
+  // 64 -> 320 and 320 -> 64 (no bias): packed layouts that fit in the weights' bytes. 64 -> 48: they do
+  // not (the layouts pad the outputs to 64 here), so those weights stay plain.
+  const auto make = [&] {
+    return torch::nn::Sequential(Linear(64, 320, true, options), Linear(320, 64, false, options),
+                                 Linear(64, 48, true, options));
+  };
+  torch::nn::Sequential plain = make(), in_place = make();
+  randomize_parameters(*plain, 0.1);
+  for (size_t i = 0; i < plain->size(); ++i)
+    for (const auto& item : plain[i]->named_parameters()) in_place[i]->named_parameters()[item.key()].copy_(item.value());
+  pack_weights_in_place(*in_place);
+  const auto weight = [](torch::nn::Sequential& m, size_t i) { return m[i]->as<LinearImpl>()->weight; };
+  const void* storage = weight(in_place, 0).data_ptr();
+
+  const torch::Tensor x = torch::randn({2, 100, 64}).to(type);
+  const torch::Tensor expected = plain->forward(x);
+  const torch::Tensor hidden = reference(x, weight(plain, 0), plain[0]->as<LinearImpl>()->bias);
+  EXPECT_LT(relative_max_error(expected, reference(reference(hidden, weight(plain, 1), {}), weight(plain, 2),
+                                                   plain[2]->as<LinearImpl>()->bias)),
+            type == torch::kFloat ? 1e-6 : 3.0 / 256);
+  EXPECT_TRUE(torch::equal(in_place->forward(x), expected));
+  EXPECT_TRUE(torch::equal(in_place->forward(x), expected));
+  EXPECT_EQ(weight(in_place, 0).data_ptr(), storage);
+  for (size_t i = 0; i < 2; ++i)
+    EXPECT_FALSE(torch::equal(weight(in_place, i), weight(plain, i))) << "layer " << i << " was not packed";
+  EXPECT_TRUE(torch::equal(weight(in_place, 2), weight(plain, 2)));
+  // Other row counts get their own plans on the packed values.
+  for (int64_t rows : {1, 7, 513}) {
+    const torch::Tensor other = torch::randn({rows, 64}).to(type);
+    EXPECT_TRUE(torch::equal(in_place->forward(other), plain->forward(other))) << rows << " rows";
+  }
+  // New values copied in, as a weight loader does: packed again from them.
+  const torch::Tensor fresh = (torch::randn({320, 64}) * 0.1).to(type);
+  weight(plain, 0).copy_(fresh);
+  weight(in_place, 0).copy_(fresh);
+  EXPECT_TRUE(torch::equal(in_place->forward(x), plain->forward(x)));
+  EXPECT_FALSE(torch::equal(weight(in_place, 0), fresh));
+  // An input of another dtype would take ATen's path over the packed bytes.
+  const torch::ScalarType other_type = type == torch::kFloat ? torch::kDouble : torch::kFloat;
+  EXPECT_THROW(in_place->forward(x.to(other_type)), c10::Error);
+}
+
+TEST(OnednnLinear, Fp32PackedInPlaceGivesTheSameValues) {
+  if (!cpu_runs_avx512_kernels()) GTEST_SKIP() << "fp32 linear layers take ATen's path on this CPU";
+  check_packed_in_place(torch::kFloat);
+}
+
+TEST(OnednnLinear, Bf16PackedInPlaceGivesTheSameValues) {
+  U3D_SKIP_UNLESS_BF16_KERNELS();
+  check_packed_in_place(torch::kBFloat16);
 }
 
 }  // namespace

@@ -1,7 +1,6 @@
 #include "nn/layers/layers.h"
 
 #include "nn/layers/group_norm_kernel.h"
-#include "nn/layers/onednn_linear.h"
 
 namespace u3d::nn {
 
@@ -11,9 +10,13 @@ LinearImpl::LinearImpl(int64_t in_features, int64_t out_features, bool has_bias,
 }
 
 torch::Tensor LinearImpl::forward(const torch::Tensor& x) {
-  if (onednn_linear_applies(x, weight)) return onednn_linear(x, weight, bias);
+  if (OnednnLinear::applies(x, weight)) return onednn_->forward(x, weight, bias);
+  TORCH_CHECK(!onednn_->holds_packed_weights(), "linear: the weights are packed for oneDNN, which cannot take a ",
+              x.scalar_type(), " input on ", x.device());
   return torch::linear(x, weight, bias);
 }
+
+void LinearImpl::pack_weights_in_place() { onednn_->pack_in_place(weight); }
 
 Conv2dImpl::Conv2dImpl(int64_t in_channels, int64_t out_channels, int64_t kernel, int64_t stride_, int64_t padding_,
                        bool has_bias, const torch::TensorOptions& options)
@@ -29,9 +32,11 @@ torch::Tensor Conv2dImpl::forward(const torch::Tensor& x) {
 
 void Conv2dImpl::pack_weights_in_place() { onednn_->pack_in_place(); }
 
-void pack_conv_weights_in_place(torch::nn::Module& model) {
-  for (const auto& module : model.modules(/*include_self=*/true))
+void pack_weights_in_place(torch::nn::Module& model) {
+  for (const auto& module : model.modules(/*include_self=*/true)) {
     if (auto* conv = dynamic_cast<Conv2dImpl*>(module.get())) conv->pack_weights_in_place();
+    if (auto* linear = dynamic_cast<LinearImpl*>(module.get())) linear->pack_weights_in_place();
+  }
 }
 
 GroupNormImpl::GroupNormImpl(int64_t groups_, int64_t channels, double eps_, const torch::TensorOptions& options)

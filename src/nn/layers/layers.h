@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "nn/layers/onednn_conv.h"
+#include "nn/layers/onednn_linear.h"
 
 namespace u3d::nn {
 
@@ -15,7 +16,14 @@ class LinearImpl : public torch::nn::Module {
  public:
   LinearImpl(int64_t in_features, int64_t out_features, bool bias, const torch::TensorOptions& options);
   torch::Tensor forward(const torch::Tensor& x);
+  // bf16, or fp32 with AVX-512, on the CPU: pack the weights into their own storage
+  // (OnednnLinear::pack_in_place).
+  void pack_weights_in_place();
   torch::Tensor weight, bias;  // bias undefined when disabled
+
+ private:
+  // bf16, or fp32 with AVX-512, on the CPU: oneDNN's matrix product directly (nn/layers/onednn_linear.h).
+  std::shared_ptr<OnednnLinear> onednn_ = std::make_shared<OnednnLinear>();
 };
 TORCH_MODULE(Linear);
 
@@ -35,9 +43,9 @@ class Conv2dImpl : public torch::nn::Module {
 };
 TORCH_MODULE(Conv2d);
 
-// pack_weights_in_place() on every Conv2d inside `model`: for a loaded network that only serves forward
-// passes (OnednnConv2d::pack_in_place says what that gives up).
-void pack_conv_weights_in_place(torch::nn::Module& model);
+// pack_weights_in_place() on every Conv2d and Linear inside `model`: for a loaded network that only serves
+// forward passes (OnednnConv2d::pack_in_place says what that gives up).
+void pack_weights_in_place(torch::nn::Module& model);
 
 // The norms compute in the dtype of their weights: fp32 weights normalise bf16/fp16 activations in
 // fp32 and return the activations' dtype (nn/precision.h).

@@ -69,7 +69,7 @@ ConditioningModels load_conditioning_models(const DiffusersFolder& folder, Preci
                         reader.options());
   allocate_in_precision(*m.vae, precision);
   reader.load(*m.vae, vae_weights);
-  pack_conv_weights_in_place(*m.vae);
+  pack_weights_in_place(*m.vae);
   return m;
 }
 

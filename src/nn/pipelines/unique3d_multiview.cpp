@@ -38,7 +38,7 @@ std::unique_ptr<MultiViewModel> MultiViewModel::load(const std::filesystem::path
   m->unet = UNet2DConditionModel(config, reader.options());
   allocate_in_precision(*m->unet, precision);
   reader.load(*m->unet, unet_weights);
-  pack_conv_weights_in_place(*m->unet);
+  pack_weights_in_place(*m->unet);
   set_attention_processors(*m->unet, self_attention_only(std::make_shared<MultiViewAttentionProcessor>(kViews)));
   return m;
 }

@@ -37,7 +37,7 @@ std::unique_ptr<ReferenceUNet> load_reference_unet(const DiffusersFolder& base, 
     reader.load(*unet->reference, base_unet_weights);
   else
     reader.apply(*unet->reference, std::move(reference), {}, unet_weights.string() + " (" + kRefUnetPrefix + "*)");
-  pack_conv_weights_in_place(*unet->unet);  // the reference UNet is registered inside it
+  pack_weights_in_place(*unet->unet);  // the reference UNet is registered inside it
   return unet;
 }
 

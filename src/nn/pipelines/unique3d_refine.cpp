@@ -99,7 +99,7 @@ std::unique_ptr<RefineEncoders> RefineEncoders::load(const RefineCheckpoints& c,
   m->vae = AutoencoderKL(AutoencoderKLConfig::from_json(read_json_file(f.vae_config), f.vae_config.string()), cpu);
   allocate_in_precision(*m->vae, precision);
   reader.load(*m->vae, f.vae_weights);
-  pack_conv_weights_in_place(*m->vae);
+  pack_weights_in_place(*m->vae);
   return m;
 }
 
@@ -161,14 +161,14 @@ std::unique_ptr<RefineModel> RefineModel::load(const RefineCheckpoints& c, Preci
   m->unet = UNet2DConditionModel(UNetConfig::from_json(read_json_file(f.unet_config), f.unet_config.string()), cpu);
   allocate_in_precision(*m->unet, precision);
   reader.load(*m->unet, f.unet_weights);
-  pack_conv_weights_in_place(*m->unet);
+  pack_weights_in_place(*m->unet);
   m->ip_adapter = load_ip_adapter(*m->unet, f.adapter_weights, 1.0, reader);
   set_precision(*m->ip_adapter, precision);  // built to the file's sizes as it is read
   m->controlnet = ControlNetModel(
       ControlNetConfig::from_json(read_json_file(f.controlnet_config), f.controlnet_config.string()), cpu);
   allocate_in_precision(*m->controlnet, precision);
   reader.load(*m->controlnet, f.controlnet_weights);
-  pack_conv_weights_in_place(*m->controlnet);
+  pack_weights_in_place(*m->controlnet);
   m->vae = AutoencoderKL(AutoencoderKLConfig::from_json(read_json_file(f.vae_config), f.vae_config.string()), cpu);
   allocate_in_precision(*m->vae, precision);
   reader.load(*m->vae, f.vae_weights);
