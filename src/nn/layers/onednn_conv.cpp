@@ -117,9 +117,7 @@ struct OnednnConv2d::State {
                                                   (buffer = torch::empty({int64_t(desc.get_size())}, torch::kUInt8))
                                                       .data_ptr())
                                    : dnnl::memory(desc, onednn_cpu_engine());
-    dnnl::stream stream(onednn_cpu_engine());
-    dnnl::reorder(source, target).execute(stream, source, target);
-    stream.wait();
+    onednn_reorder(source, target);
     if (!in_place) return {desc, target};
     std::memcpy(weight.data_ptr(), buffer.data_ptr(), desc.get_size());
     packed_in_place = true;
@@ -160,16 +158,7 @@ torch::Tensor OnednnConv2d::forward(const torch::Tensor& x, const torch::Tensor&
   const torch::Tensor bias_c = bias.defined() ? bias.contiguous() : bias;
   if (bias_c.defined())
     args.emplace(DNNL_ARG_BIAS, dnnl::memory(pd.bias_desc(), onednn_cpu_engine(), bias_c.data_ptr()));
-  // The kernel's work space comes from libtorch's allocator, which keeps freed blocks for reuse
-  // (nn/tensor_allocator.h); oneDNN's own would stay allocated with every plan.
-  torch::Tensor scratch;
-  if (const size_t bytes = pd.scratchpad_desc().get_size(); bytes > 0) {
-    scratch = torch::empty({static_cast<int64_t>(bytes)}, torch::TensorOptions().dtype(torch::kUInt8));
-    args.emplace(DNNL_ARG_SCRATCHPAD, dnnl::memory(pd.scratchpad_desc(), onednn_cpu_engine(), scratch.data_ptr()));
-  }
-  dnnl::stream stream(onednn_cpu_engine());
-  plan.primitive.execute(stream, args);
-  stream.wait();
+  onednn_execute(plan.primitive, pd.scratchpad_desc(), std::move(args));
   return out;
 }
 

@@ -94,9 +94,7 @@ struct OnednnLinear::State {
     TORCH_CHECK(buffer != MAP_FAILED, "linear: no memory for packing ", bytes, " bytes of weights");
     dnnl::memory source(plain(weight), onednn_cpu_engine(), weight.data_ptr());
     dnnl::memory target(desc, onednn_cpu_engine(), buffer);
-    dnnl::stream stream(onednn_cpu_engine());
-    dnnl::reorder(source, target).execute(stream, source, target);
-    stream.wait();
+    onednn_reorder(source, target);
     std::memcpy(weight.data_ptr(), buffer, bytes);
     munmap(buffer, bytes);
     packed_in_place = true;
@@ -118,9 +116,7 @@ struct OnednnLinear::State {
     if (pd.weights_desc() != packed) {
       dnnl::memory source(packed, onednn_cpu_engine(), weight.data_ptr());
       own = dnnl::memory(pd.weights_desc(), onednn_cpu_engine());
-      dnnl::stream stream(onednn_cpu_engine());
-      dnnl::reorder(source, own).execute(stream, source, own);
-      stream.wait();
+      onednn_reorder(source, own);
     }
     plans.push_back({rows, has_bias, bias_f32, pd, dnnl::matmul(pd), own});
     return plans.back();
@@ -172,15 +168,7 @@ torch::Tensor OnednnLinear::forward(const torch::Tensor& x, const torch::Tensor&
       {DNNL_ARG_DST, dnnl::memory(pd.dst_desc(), onednn_cpu_engine(), out.data_ptr())}};
   if (bias_c.defined())
     args.emplace(DNNL_ARG_BIAS, dnnl::memory(pd.bias_desc(), onednn_cpu_engine(), bias_c.data_ptr()));
-  // The kernel's work space from libtorch's allocator, as for the convolutions (nn/layers/onednn_conv.cpp).
-  torch::Tensor scratch;
-  if (const size_t bytes = pd.scratchpad_desc().get_size(); bytes > 0) {
-    scratch = torch::empty({static_cast<int64_t>(bytes)}, torch::TensorOptions().dtype(torch::kUInt8));
-    args.emplace(DNNL_ARG_SCRATCHPAD, dnnl::memory(pd.scratchpad_desc(), onednn_cpu_engine(), scratch.data_ptr()));
-  }
-  dnnl::stream stream(onednn_cpu_engine());
-  plan.primitive.execute(stream, args);
-  stream.wait();
+  onednn_execute(plan.primitive, pd.scratchpad_desc(), std::move(args));
   return out;
 }
 

@@ -80,9 +80,7 @@ struct Layer {
     dnnl::memory source({{plain.size(0), plain.size(1), w.size(2), w.size(3)}, dnnl_type(w.scalar_type()), Tag::oihw},
                         onednn_cpu_engine(), plain.data_ptr());
     dnnl::memory target(desc, onednn_cpu_engine());
-    dnnl::stream stream(onednn_cpu_engine());
-    dnnl::reorder(source, target).execute(stream, source, target);
-    stream.wait();
+    onednn_reorder(source, target);
     packed.emplace_back(desc, target);
     return packed.back().second;
   }
