@@ -1,6 +1,6 @@
 // The bf16 CPU kernels behind Conv2d, GroupNorm, the attention softmax (nn/layers/onednn_conv.h,
-// nn/layers/group_norm_kernel.h, nn/layers/softmax_kernel.h), the fused attention (nn/layers/attention_kernel.h)
-// and GEGLU (nn/layers/geglu_kernel.h), against ATen in fp32 or float64 on the same bf16 values; and the
+// nn/layers/group_norm_kernel.h, nn/layers/softmax_kernel.h), the fused attention (nn/layers/attention_kernel.h),
+// GEGLU (nn/layers/geglu_kernel.h) and LayerNorm (nn/layers/layer_norm_kernel.h), against ATen in fp32 or float64 on the same bf16 values; and the
 // fp32 path of the convolution and GroupNorm kernels against float64 (Fp32Kernels).
 #include <ATen/Parallel.h>
 #include <gtest/gtest.h>
@@ -13,6 +13,7 @@
 #include "nn/layers/attention_kernel.h"
 #include "nn/layers/geglu_kernel.h"
 #include "nn/layers/group_norm_kernel.h"
+#include "nn/layers/layer_norm_kernel.h"
 #include "nn/layers/layers.h"
 #include "nn/layers/onednn_conv.h"
 #include "nn/layers/softmax_kernel.h"
@@ -487,6 +488,42 @@ TEST(Fp32Kernels, GegluMatchesFloat64) {
   const torch::Tensor relative = (out.to(torch::kDouble) - expected).abs() / (expected.abs() + 1e-300);
   EXPECT_LT(relative.max().item<double>(), 2e-5);
   EXPECT_LT(relative.masked_select(g > -3.0).max().item<double>(), 1e-6);
+}
+
+TEST(Bf16Kernels, LayerNormMatchesFloat64) {
+  torch::NoGradGuard no_grad;
+  torch::manual_seed(31);
+  // Rows of 320 (the UNet's first level: ten pairs of vectors), 40 (two vectors and a tail of 8) and 7
+  // (a tail alone); values about a mean of 200, where a one-pass variance in fp32 would lose its digits.
+  for (const int64_t n : {320, 40, 7}) {
+    SCOPED_TRACE(testing::Message() << n << " values a row");
+    const torch::Tensor x = (torch::randn({3, 37, n}) * 0.5 + 200).to(torch::kBFloat16);
+    const torch::Tensor weight = torch::randn({n}), bias = torch::randn({n});
+    ASSERT_TRUE(layer_norm_bf16_applies(x, weight, bias));
+    const torch::Tensor out = layer_norm_bf16(x, weight, bias, 1e-5);
+    EXPECT_EQ(out.scalar_type(), torch::kBFloat16);
+    EXPECT_EQ(out.sizes(), x.sizes());
+    const torch::Tensor expected = torch::layer_norm(x.to(torch::kDouble), {n}, weight.to(torch::kDouble),
+                                                     bias.to(torch::kDouble), 1e-5);
+    // One bf16 step of the result, plus fp32's rounding of the two terms (x - mean)·rstd·w and b, each
+    // of a few units, where they cancel to a result near 0.
+    const torch::Tensor error = (out.to(torch::kDouble) - expected).abs() - expected.abs() / 128;
+    EXPECT_LT(error.max().item<double>(), 1e-4);
+    // The layer takes this kernel for bf16 activations, and the same values come out at any thread count.
+    LayerNorm layer(n, 1e-5, torch::TensorOptions().dtype(torch::kFloat));
+    layer->weight.copy_(weight);
+    layer->bias.copy_(bias);
+    EXPECT_TRUE(torch::equal(layer->forward(x), out));
+    const int threads = at::get_num_threads();
+    at::set_num_threads(1);
+    EXPECT_TRUE(torch::equal(layer_norm_bf16(x, weight, bias, 1e-5), out));
+    at::set_num_threads(threads);
+  }
+  const torch::Tensor x = torch::randn({4, 16}).to(torch::kBFloat16), w = torch::ones({16}), b = torch::zeros({16});
+  EXPECT_FALSE(layer_norm_bf16_applies(x.t(), w, b));                            // strided
+  EXPECT_FALSE(layer_norm_bf16_applies(x, w.to(torch::kBFloat16), b));           // bf16 weights: ATen
+  EXPECT_FALSE(layer_norm_bf16_applies(x.narrow(1, 0, 8).contiguous(), w, b));   // a size mismatch
+  EXPECT_THROW(layer_norm_bf16(x.to(torch::kFloat), w, b, 1e-5), c10::Error);   // fp32 stays with ATen
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "nn/layers/layers.h"
 
 #include "nn/layers/group_norm_kernel.h"
+#include "nn/layers/layer_norm_kernel.h"
 
 namespace u3d::nn {
 
@@ -66,6 +67,7 @@ LayerNormImpl::LayerNormImpl(int64_t dim, double eps_, const torch::TensorOption
 }
 
 torch::Tensor LayerNormImpl::forward(const torch::Tensor& x) {
+  if (layer_norm_bf16_applies(x, weight, bias)) return layer_norm_bf16(x, weight, bias, eps);
   if (x.scalar_type() == weight.scalar_type()) return torch::layer_norm(x, {weight.size(0)}, weight, bias, eps);
   return torch::layer_norm(x.to(weight.scalar_type()), {weight.size(0)}, weight, bias, eps).to(x.scalar_type());
 }

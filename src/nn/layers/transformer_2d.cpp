@@ -92,7 +92,9 @@ torch::Tensor Transformer2DModelImpl::forward(const torch::Tensor& x, const torc
   const int64_t inner = tokens.size(1);
   tokens = tokens.permute({0, 2, 3, 1}).reshape({b, h * w, inner});
   for (auto& block : blocks) tokens = block->forward(tokens, encoder_hidden_states);
-  torch::Tensor out = tokens.reshape({b, h, w, inner}).permute({0, 3, 1, 2}).contiguous();
+  // The tokens are the output map in channels-last order: the convolution reads them where they are
+  // (nn/layers/onednn_conv.h), with no copy into NCHW and back.
+  const torch::Tensor out = tokens.reshape({b, h, w, inner}).permute({0, 3, 1, 2});
   return proj_out->forward(out).add_(x);
 }
 
