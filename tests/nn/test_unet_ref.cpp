@@ -188,6 +188,27 @@ TEST_F(UNetRef, IdenticalGroupsShareOneReferencePass) {
   EXPECT_EQ(batches_run(calls), two_groups);
 }
 
+// Groups that share one reference entry have its crosspond term (to_out(to_v(tokens))) computed once for
+// all of them (ReferenceStore::rows). Their outputs are those of groups with an entry each, bit for bit:
+// +0 and -0 condition latents are the same values but not the same input, so those are not shared.
+TEST_F(UNetRef, SharedReferenceEntriesGiveTheValuesOfSeparateOnes) {
+  torch::NoGradGuard no_grad;
+  auto& calls = count_reference_cross_attention(*model);
+  const torch::Tensor zeros = torch::zeros_like(in["condition_latents"].narrow(0, 0, 1));
+  const torch::Tensor sample = torch::cat({in["sample"], in["sample"].flip(0)});
+  const torch::Tensor context = in["encoder_hidden_states"].narrow(0, 0, 1).repeat({4, 1, 1});
+  for (const int64_t groups : {2, 4}) {
+    SCOPED_TRACE(testing::Message() << groups << " groups of " << 4 / groups);
+    torch::Tensor same = zeros.repeat({groups, 1, 1, 1}), signs = same.clone();
+    signs.narrow(0, 1, 1).neg_();
+    const torch::Tensor shared = model->forward(sample, in["timestep"], context, same);
+    EXPECT_EQ(batches_run(calls), (std::vector<int64_t>{1, 1, 1}));
+    const torch::Tensor separate = model->forward(sample, in["timestep"], context, signs);
+    EXPECT_EQ(batches_run(calls).front(), 2);
+    EXPECT_TRUE(torch::equal(shared, separate));
+  }
+}
+
 TEST_F(UNetRef, Bf16StaysCloseToTheReference) {
   U3D_SKIP_UNLESS_BF16_KERNELS();
   torch::NoGradGuard no_grad;

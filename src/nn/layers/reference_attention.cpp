@@ -1,5 +1,6 @@
 #include "nn/layers/reference_attention.h"
 
+#include <algorithm>
 #include <utility>
 
 #include "core/error.h"
@@ -44,17 +45,24 @@ torch::Tensor ReferenceReadProcessor::process(AttentionImpl& attention, const to
   auto it = store->states.find(name);
   if (it == store->states.end())
     throw Error("reference attention: no reference tokens recorded for " + name + " (run the reference pass first)");
-  torch::Tensor reference = std::move(it->second);
+  const torch::Tensor reference = std::move(it->second);
   store->states.erase(it);
-  if (reference.dim() != 3 || reference.size(0) == 0 || x.size(0) % reference.size(0) != 0 ||
+  const std::vector<int64_t>& rows = store->rows;
+  const int64_t groups = rows.empty() ? reference.size(0) : int64_t(rows.size());
+  const bool rows_fit = std::all_of(rows.begin(), rows.end(), [&](int64_t r) { return r >= 0 && r < reference.size(0); });
+  if (reference.dim() != 3 || reference.size(0) == 0 || !rows_fit || x.dim() != 3 || x.size(0) % groups != 0 ||
       reference.size(1) != x.size(1) || reference.size(2) != x.size(2))
     throw Error("reference attention: reference tokens " + c10::str(reference.sizes()) + " do not fit the input " +
                 c10::str(x.sizes()) + " at " + name);
-  const int64_t per_reference = x.size(0) / reference.size(0);
-  if (per_reference > 1) reference = reference.repeat_interleave(per_reference, 0);
+  // One key per query: softmax = 1, so the attention output is the projected value, the same for every
+  // entry that reads one reference entry: computed once per reference entry.
+  const torch::Tensor term =
+      crosspond_attention->out_proj->forward(crosspond_attention->to_v->forward(reference.to(x.scalar_type())));
   torch::Tensor out = attention.attend(x, context.defined() ? context : x);
-  // One key per query: softmax = 1, so the attention output is the projected value.
-  return out + crosspond_attention->out_proj->forward(crosspond_attention->to_v->forward(reference.to(x.scalar_type())));
+  const int64_t per_group = x.size(0) / groups;
+  for (int64_t g = 0; g < groups; ++g)
+    out.narrow(0, g * per_group, per_group).add_(term.narrow(0, rows.empty() ? g : rows[size_t(g)], 1));
+  return out;
 }
 
 size_t install_reference_attention(torch::nn::Module& main, torch::nn::Module& reference,

@@ -13,6 +13,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "nn/layers/attention.h"
 
@@ -21,6 +22,10 @@ namespace u3d::nn {
 // Tokens recorded by the reference pass, by processor name ("<attn1 module path>.processor").
 struct ReferenceStore {
   std::map<std::string, torch::Tensor> states;
+  // Where not empty, the recorded tokens hold one entry per distinct condition and group g of the main
+  // UNet's input reads entry rows[g] (ReferenceUNet::forward: groups with identical inputs share one
+  // pass); empty: group g reads entry g.
+  std::vector<int64_t> rows;
   size_t writers = 0;  // write processors recording into this store (install_reference_attention)
   // When set, the write processor that completes `states` (every writer has recorded) ends the
   // reference pass by throwing ReferencePassComplete instead of attending: nothing the pass computes
@@ -45,9 +50,10 @@ class ReferenceReadProcessor : public AttentionProcessor {
   // dim: the attention's query_dim; crosspond_attention is Attention(dim, heads 8, dim_head dim/8, biases).
   ReferenceReadProcessor(std::shared_ptr<ReferenceStore> store, std::string name, int64_t dim,
                          const torch::TensorOptions& options);
-  // Takes (and removes) the recorded tokens [B, L, C]; x may hold k·B entries, each group of k
-  // consecutive entries using one reference entry (the views of one object). A missing record or a
-  // shape that does not fit is an Error.
+  // Takes (and removes) the recorded tokens [R, L, C]; x holds G·k entries in G groups of k consecutive
+  // ones (the views of one object), group g using reference entry store->rows[g] (entry g where rows is
+  // empty, G = R). The crosspond term is computed once per reference entry and added to every entry of
+  // the groups that read it. A missing record or a shape that does not fit is an Error.
   torch::Tensor process(AttentionImpl& attention, const torch::Tensor& x, const torch::Tensor& context) override;
 
   std::shared_ptr<ReferenceStore> store;

@@ -75,6 +75,7 @@ torch::Tensor ReferenceUNet::forward(const torch::Tensor& sample, const torch::T
   }
 
   store->states.clear();
+  store->rows.clear();
   // The pass ends with the last input it records (ReferenceStore::stop_when_recorded): the rest of the
   // reference UNet (in SD 1.x that last attn1's attention, its block's cross-attention and feed-forward,
   // proj_out and conv_out at full resolution) gives an output nobody reads.
@@ -85,23 +86,28 @@ torch::Tensor ReferenceUNet::forward(const torch::Tensor& sample, const torch::T
   } catch (...) {
     store->stop_when_recorded = false;
     store->states.clear();
+    store->rows.clear();
     throw;
   }
   store->stop_when_recorded = false;
-  if (int64_t(distinct.size()) < groups) {
+  // The shared entries stay shared: each read processor projects an entry once for all the groups that
+  // read it (ReferenceStore::rows).
+  if (int64_t(distinct.size()) < groups) store->rows = row_of_group;
+  if (reference_states) {
     const torch::Tensor rows = torch::tensor(row_of_group, torch::kLong);
-    for (auto& [name, tokens] : store->states) tokens = tokens.index_select(0, rows);
+    for (const auto& [name, tokens] : store->states)
+      (*reference_states)[name] = store->rows.empty() ? tokens : tokens.index_select(0, rows);
   }
-  if (reference_states)
-    for (const auto& [name, tokens] : store->states) (*reference_states)[name] = tokens;
   torch::Tensor out;
   try {
     out = unet->forward(sample, timestep, encoder_hidden_states);
   } catch (...) {
     store->states.clear();
+    store->rows.clear();
     throw;
   }
   store->states.clear();
+  store->rows.clear();
   return out;
 }
 
