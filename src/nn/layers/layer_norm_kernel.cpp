@@ -14,17 +14,11 @@ namespace {
 
 using namespace vector_math;
 
-U3D_INLINE float lane_sum(f32x16 v) {
-  float total = 0;
-  for (int i = 0; i < kWidth; ++i) total += v[i];
-  return total;
-}
-
-// The row's values from j on, fewer than 16, in a vector padded with `pad`.
-U3D_INLINE f32x16 load_tail(const uint16_t* x, int64_t j, int64_t n, float pad) {
-  f32x16 v = splat(pad);
-  for (int64_t i = j; i < n; ++i) v[i - j] = bf16_to_float(x[i]);
-  return v;
+// Lane i < count of 16.
+U3D_INLINE i32x16 lanes_below(int64_t count) {
+  i32x16 mask{};
+  for (int i = 0; i < kWidth; ++i) mask[i] = i < count ? -1 : 0;
+  return mask;
 }
 
 // One row of n values: its mean, the sum of squared deviations from it, then the normalised output.
@@ -38,8 +32,8 @@ U3D_VECTOR_CLONES void normalise_row(const uint16_t* x, int64_t n, const float* 
     sum2 += load_bf16(x + j + kWidth);
   }
   if (j < full) sum += load_bf16(x + j);
-  if (full < n) sum2 += load_tail(x, full, n, 0.0f);
-  const float mean = lane_sum(sum + sum2) / static_cast<float>(n);
+  if (full < n) sum2 += load_bf16_tail(x + full, n - full, 0);
+  const float mean = horizontal_sum(sum + sum2) / static_cast<float>(n);
   f32x16 squares{}, squares2{};
   for (j = 0; j + 2 * kWidth <= full; j += 2 * kWidth) {
     const f32x16 d = load_bf16(x + j) - mean, d2 = load_bf16(x + j + kWidth) - mean;
@@ -51,10 +45,10 @@ U3D_VECTOR_CLONES void normalise_row(const uint16_t* x, int64_t n, const float* 
     squares += d * d;
   }
   if (full < n) {
-    const f32x16 d = load_tail(x, full, n, mean) - mean;
-    squares2 += d * d;
+    const f32x16 d = load_bf16_tail(x + full, n - full, 0) - mean;
+    squares2 += lanes_below(n - full) ? d * d : f32x16{};
   }
-  const float variance = lane_sum(squares + squares2) / static_cast<float>(n);
+  const float variance = horizontal_sum(squares + squares2) / static_cast<float>(n);
   const float rstd = static_cast<float>(1.0 / std::sqrt(static_cast<double>(variance) + eps));
   for (j = 0; j < full; j += kWidth)
     store_bf16(out + j, (load_bf16(x + j) - mean) * rstd * load(weight + j) + load(bias + j));

@@ -18,24 +18,10 @@ using namespace vector_math;
 constexpr float kInfinity = std::numeric_limits<float>::infinity();
 constexpr uint16_t kBf16MinusInfinity = 0xff80;
 
-// The last n < 16 values of a row, padded with `fill`.
-U3D_INLINE f32x16 load_bf16_tail(const uint16_t* x, int64_t n, uint16_t fill) {
-  uint16_t padded[kWidth];
-  std::fill(padded, padded + kWidth, fill);
-  std::copy(x, x + n, padded);
-  return load_bf16(padded);
-}
-
 U3D_INLINE float horizontal_max(f32x16 v) {
   float m = v[0];
   for (int64_t j = 1; j < kWidth; ++j) m = std::max(m, v[j]);
   return m;
-}
-
-U3D_INLINE float horizontal_sum(f32x16 v) {
-  float s = 0.0f;
-  for (int64_t j = 0; j < kWidth; ++j) s += v[j];
-  return s;
 }
 
 U3D_VECTOR_CLONES float row_max(const uint16_t* x, int64_t n) {

@@ -48,6 +48,19 @@ U3D_INLINE void store_bf16(uint16_t* p, f32x16 f) {
   std::memcpy(p, &h, sizeof h);
 }
 
+// The first n < 16 bf16 values at x, the other lanes `fill`.
+U3D_INLINE f32x16 load_bf16_tail(const uint16_t* x, int64_t n, uint16_t fill) {
+  uint16_t padded[kWidth];
+  for (int64_t i = 0; i < kWidth; ++i) padded[i] = i < n ? x[i] : fill;
+  return load_bf16(padded);
+}
+
+U3D_INLINE float horizontal_sum(f32x16 v) {
+  float s = 0.0f;
+  for (int64_t j = 0; j < kWidth; ++j) s += v[j];
+  return s;
+}
+
 U3D_INLINE float bf16_to_float(uint16_t v) { return std::bit_cast<float>(static_cast<uint32_t>(v) << 16); }
 
 // Element access for kernels written once for bf16 (its 16 bits; rounded once on the way out) and fp32.
