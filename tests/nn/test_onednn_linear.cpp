@@ -4,6 +4,7 @@
 #include <torch/torch.h>
 
 #include "nn/layers/layers.h"
+#include "nn/layers/transformer_2d.h"
 #include "nn/precision.h"
 #include "nn/runtime.h"
 #include "required_skip.h"
@@ -123,6 +124,50 @@ TEST(OnednnLinear, Fp32PackedInPlaceGivesTheSameValues) {
 TEST(OnednnLinear, Bf16PackedInPlaceGivesTheSameValues) {
   U3D_SKIP_UNLESS_BF16_KERNELS();
   check_packed_in_place(torch::kBFloat16);
+}
+
+// GEGLU's projection in two products with the gating applied as they are written (LinearImpl::
+// gated_forward): hidden * gelu(gate) against float64 of the same (rounded) weights, packed or not;
+// the split layer's plain forward still gives the whole projection [hidden | gate].
+void check_gated(torch::ScalarType type, double tolerance) {
+  torch::NoGradGuard no_grad;
+  torch::manual_seed(19);
+  const torch::TensorOptions options = torch::TensorOptions().dtype(type);
+  GEGLU plain(64, 128, options), packed(64, 128, options);  // 64 -> halves of 128: packed layouts that fit
+  randomize_parameters(*plain, 0.3);
+  for (const auto& item : plain->named_parameters()) packed->named_parameters()[item.key()].copy_(item.value());
+  const torch::Tensor weight = plain->proj->weight.to(torch::kDouble), bias = plain->proj->bias.to(torch::kDouble);
+  pack_weights_in_place(*packed);
+  EXPECT_FALSE(torch::equal(packed->proj->weight, plain->proj->weight));
+
+  const torch::Tensor x = (torch::randn({2, 37, 64}) * 2).to(type);
+  const torch::Tensor projection = torch::linear(x.to(torch::kDouble), weight, bias);
+  const torch::Tensor h = projection.narrow(-1, 0, 128), g = projection.narrow(-1, 128, 128);
+  ASSERT_GT(g.abs().max().item<double>(), 3.0) << "the gates should reach GELU's curved range and beyond";
+  const torch::Tensor expected = h * 0.5 * g * torch::erfc(-g / std::sqrt(2.0));
+  ASSERT_TRUE(plain->proj->gated_forward_applies(x));
+  const torch::Tensor out = plain->forward(x);
+  ASSERT_EQ(out.sizes(), (std::vector<int64_t>{2, 37, 128}));
+  EXPECT_EQ(out.scalar_type(), type);
+  EXPECT_LT(relative_max_error(out, expected), tolerance);
+  EXPECT_TRUE(torch::equal(packed->forward(x), out));
+  // The GELU matches the standalone kernel's, the projection of the split layer is the whole one.
+  EXPECT_LT(relative_max_error(plain->proj->forward(x), projection), type == torch::kFloat ? 1e-6 : 1.0 / 256);
+  EXPECT_TRUE(torch::equal(packed->proj->forward(x), plain->proj->forward(x)));
+  // A factor of another shape is refused.
+  OnednnLinear linear;
+  EXPECT_THROW(linear.forward(x, plain->proj->weight, {}, OnednnLinear::Epilogue::multiply, out), c10::Error);
+}
+
+TEST(OnednnLinear, Fp32GatedProductMatchesFloat64) {
+  if (!cpu_runs_avx512_kernels()) GTEST_SKIP() << "fp32 linear layers take ATen's path on this CPU";
+  check_gated(torch::kFloat, 1e-5);
+}
+
+TEST(OnednnLinear, Bf16GatedProductMatchesFloat64) {
+  U3D_SKIP_UNLESS_BF16_KERNELS();
+  // The GELU of the gate rounded to bf16, then the product: two roundings of 2^-9.
+  check_gated(torch::kBFloat16, 2.0 / 256);
 }
 
 }  // namespace

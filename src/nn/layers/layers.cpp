@@ -10,14 +10,55 @@ LinearImpl::LinearImpl(int64_t in_features, int64_t out_features, bool has_bias,
   if (has_bias) bias = register_parameter("bias", torch::empty({out_features}, options), false);
 }
 
+namespace {
+
+// The first (0) or second (1) half of a weight's rows or of a bias; undefined stays undefined.
+torch::Tensor half(const torch::Tensor& t, int64_t which) {
+  if (!t.defined()) return t;
+  const int64_t n = t.size(0) / 2;
+  return t.narrow(0, which * n, n);
+}
+
+}  // namespace
+
 torch::Tensor LinearImpl::forward(const torch::Tensor& x) {
-  if (OnednnLinear::applies(x, weight)) return onednn_->forward(x, weight, bias);
-  TORCH_CHECK(!onednn_->holds_packed_weights(), "linear: the weights are packed for oneDNN, which cannot take a ",
+  if (OnednnLinear::applies(x, weight)) {
+    if (!gate_onednn_) return onednn_->forward(x, weight, bias);
+    return torch::cat({onednn_->forward(x, half(weight, 0), half(bias, 0)),
+                       gate_onednn_->forward(x, half(weight, 1), half(bias, 1))},
+                      -1);
+  }
+  TORCH_CHECK(!holds_packed_weights(), "linear: the weights are packed for oneDNN, which cannot take a ",
               x.scalar_type(), " input on ", x.device());
   return torch::linear(x, weight, bias);
 }
 
-void LinearImpl::pack_weights_in_place() { onednn_->pack_in_place(weight); }
+void LinearImpl::pack_weights_in_place() {
+  if (!gate_onednn_) return onednn_->pack_in_place(weight);
+  onednn_->pack_in_place(half(weight, 0));
+  gate_onednn_->pack_in_place(half(weight, 1));
+}
+
+void LinearImpl::split_output_halves() {
+  TORCH_CHECK(weight.size(0) % 2 == 0, "linear: ", weight.size(0), " outputs do not split in halves");
+  TORCH_CHECK(!holds_packed_weights(), "linear: the outputs are split in halves before the weights are packed");
+  if (!gate_onednn_) gate_onednn_ = std::make_shared<OnednnLinear>();
+}
+
+bool LinearImpl::gated_forward_applies(const torch::Tensor& x) const {
+  return gate_onednn_ && OnednnLinear::applies(x, weight);
+}
+
+torch::Tensor LinearImpl::gated_forward(const torch::Tensor& x) {
+  TORCH_CHECK(gated_forward_applies(x), "linear: the gated product takes split halves and oneDNN's path");
+  const torch::Tensor gelu_of_gate =
+      gate_onednn_->forward(x, half(weight, 1), half(bias, 1), OnednnLinear::Epilogue::gelu);
+  return onednn_->forward(x, half(weight, 0), half(bias, 0), OnednnLinear::Epilogue::multiply, gelu_of_gate);
+}
+
+bool LinearImpl::holds_packed_weights() const {
+  return onednn_->holds_packed_weights() || (gate_onednn_ && gate_onednn_->holds_packed_weights());
+}
 
 Conv2dImpl::Conv2dImpl(int64_t in_channels, int64_t out_channels, int64_t kernel, int64_t stride_, int64_t padding_,
                        bool has_bias, const torch::TensorOptions& options)

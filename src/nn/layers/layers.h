@@ -21,9 +21,23 @@ class LinearImpl : public torch::nn::Module {
   void pack_weights_in_place();
   torch::Tensor weight, bias;  // bias undefined when disabled
 
+  // For GEGLU's projection (nn/layers/transformer_2d.h), whose outputs are [hidden | gate]: from now on
+  // oneDNN computes the two halves as two products, each with its half of the weights (packed on its
+  // own), so that gated_forward can apply the gating as the outputs are written. Before any packing.
+  void split_output_halves();
+  // Whether gated_forward takes `x`: the halves are split and oneDNN's path applies.
+  bool gated_forward_applies(const torch::Tensor& x) const;
+  // hidden * gelu(gate), [..., out/2], the exact GELU: the gate half's product goes through the GELU as
+  // it is written, and the hidden half's is multiplied by that (in fp32, rounded once) as it is written,
+  // so the [..., out] projection is never stored.
+  torch::Tensor gated_forward(const torch::Tensor& x);
+
  private:
-  // bf16, or fp32 with AVX-512, on the CPU: oneDNN's matrix product directly (nn/layers/onednn_linear.h).
+  bool holds_packed_weights() const;
+  // bf16, or fp32 with AVX-512, on the CPU: oneDNN's matrix product directly (nn/layers/onednn_linear.h);
+  // after split_output_halves, of the first half, and gate_onednn_ of the second.
   std::shared_ptr<OnednnLinear> onednn_ = std::make_shared<OnednnLinear>();
+  std::shared_ptr<OnednnLinear> gate_onednn_;
 };
 TORCH_MODULE(Linear);
 

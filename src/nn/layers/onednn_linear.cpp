@@ -40,6 +40,7 @@ struct OnednnLinear::State {
   struct Plan {
     int64_t rows;
     bool has_bias, bias_f32;
+    Epilogue epilogue;
     dnnl::matmul::primitive_desc pd;
     dnnl::matmul primitive;
     dnnl::memory own_weights;  // the packed weights in this plan's layout where it is not `packed`'s
@@ -53,12 +54,16 @@ struct OnednnLinear::State {
   dnnl::memory::desc packed;
 
   static dnnl::matmul::primitive_desc make(int64_t rows, const torch::Tensor& weight, const dnnl::memory::desc& weights,
-                                           const torch::Tensor& bias) {
+                                           const torch::Tensor& bias, Epilogue epilogue = Epilogue::none) {
     const int64_t out = weight.size(0);
     const DataType type = dnnl_type(weight);
     const dnnl::memory::desc src({rows, weight.size(1)}, type, Tag::ab), dst({rows, out}, type, Tag::ab);
     dnnl::primitive_attr attr;
     attr.set_scratchpad_mode(dnnl::scratchpad_mode::user);
+    dnnl::post_ops post_ops;
+    if (epilogue == Epilogue::gelu) post_ops.append_eltwise(1.0f, dnnl::algorithm::eltwise_gelu_erf, 0.0f, 0.0f);
+    if (epilogue == Epilogue::multiply) post_ops.append_binary(dnnl::algorithm::binary_mul, dst);
+    attr.set_post_ops(post_ops);
     if (!bias.defined()) return {dnnl::matmul::desc(src, weights, dst), attr, onednn_cpu_engine()};
     const dnnl::memory::desc bias_desc({1, out}, dnnl_type(bias), Tag::ab);
     return {dnnl::matmul::desc(src, weights, bias_desc, dst), attr, onednn_cpu_engine()};
@@ -101,24 +106,24 @@ struct OnednnLinear::State {
     packed = desc;
   }
 
-  const Plan& plan_for(int64_t rows, const torch::Tensor& weight, const torch::Tensor& bias) {
+  const Plan& plan_for(int64_t rows, const torch::Tensor& weight, const torch::Tensor& bias, Epilogue epilogue) {
     refresh(weight);
     const bool has_bias = bias.defined(), bias_f32 = has_bias && bias.scalar_type() == torch::kFloat;
     for (const Plan& p : plans)
-      if (p.rows == rows && p.has_bias == has_bias && p.bias_f32 == bias_f32) return p;
+      if (p.rows == rows && p.has_bias == has_bias && p.bias_f32 == bias_f32 && p.epilogue == epilogue) return p;
     if (!packed_in_place) {
-      const auto pd = make(rows, weight, plain(weight), bias);
-      plans.push_back({rows, has_bias, bias_f32, pd, dnnl::matmul(pd), {}});
+      const auto pd = make(rows, weight, plain(weight), bias, epilogue);
+      plans.push_back({rows, has_bias, bias_f32, epilogue, pd, dnnl::matmul(pd), {}});
       return plans.back();
     }
-    const auto pd = make(rows, weight, any(weight), bias);
+    const auto pd = make(rows, weight, any(weight), bias, epilogue);
     dnnl::memory own;
     if (pd.weights_desc() != packed) {
       dnnl::memory source(packed, onednn_cpu_engine(), weight.data_ptr());
       own = dnnl::memory(pd.weights_desc(), onednn_cpu_engine());
       onednn_reorder(source, own);
     }
-    plans.push_back({rows, has_bias, bias_f32, pd, dnnl::matmul(pd), own});
+    plans.push_back({rows, has_bias, bias_f32, epilogue, pd, dnnl::matmul(pd), own});
     return plans.back();
   }
 };
@@ -143,7 +148,8 @@ bool OnednnLinear::holds_packed_weights() const {
   return state_->packed_in_place;
 }
 
-torch::Tensor OnednnLinear::forward(const torch::Tensor& x, const torch::Tensor& weight, const torch::Tensor& bias) {
+torch::Tensor OnednnLinear::forward(const torch::Tensor& x, const torch::Tensor& weight, const torch::Tensor& bias,
+                                   Epilogue epilogue, const torch::Tensor& factor) {
   const int64_t in = weight.size(1), out_features = weight.size(0);
   TORCH_CHECK(x.size(-1) == in, "linear: input has ", x.size(-1), " features, the weights expect ", in);
   TORCH_CHECK(!bias.defined() || ((bias.scalar_type() == weight.scalar_type() || bias.scalar_type() == torch::kFloat) &&
@@ -151,14 +157,21 @@ torch::Tensor OnednnLinear::forward(const torch::Tensor& x, const torch::Tensor&
               "linear: the bias must have the weights' dtype or fp32, with one value per output");
   std::vector<int64_t> sizes = x.sizes().vec();
   sizes.back() = out_features;
+  TORCH_CHECK(epilogue != Epilogue::multiply || (factor.defined() && factor.sizes() == torch::IntArrayRef(sizes) &&
+                                                 factor.scalar_type() == x.scalar_type() && factor.is_contiguous()),
+              "linear: the factor must be a contiguous tensor of the output's shape and dtype");
   const int64_t rows = x.numel() / std::max<int64_t>(in, 1);
   if (rows == 0 || out_features == 0) return torch::empty(sizes, x.options());
-  if (in == 0) return bias.defined() ? bias.to(x.scalar_type()).expand(sizes).contiguous() : torch::zeros(sizes, x.options());
+  if (in == 0) {
+    torch::Tensor out = bias.defined() ? bias.to(x.scalar_type()).expand(sizes).contiguous() : torch::zeros(sizes, x.options());
+    if (epilogue == Epilogue::gelu) return torch::gelu(out);
+    return epilogue == Epilogue::multiply ? out * factor : out;
+  }
   const torch::Tensor a = x.contiguous();
   const torch::Tensor bias_c = bias.defined() ? bias.contiguous() : bias;
   torch::Tensor out = torch::empty(sizes, x.options());
   std::lock_guard<std::mutex> lock(state_->mutex);
-  const State::Plan& plan = state_->plan_for(rows, weight, bias_c);
+  const State::Plan& plan = state_->plan_for(rows, weight, bias_c, epilogue);
   const auto& pd = plan.pd;
   const torch::Tensor w = state_->packed_in_place ? weight : weight.contiguous();
   std::unordered_map<int, dnnl::memory> args{
@@ -168,6 +181,9 @@ torch::Tensor OnednnLinear::forward(const torch::Tensor& x, const torch::Tensor&
       {DNNL_ARG_DST, dnnl::memory(pd.dst_desc(), onednn_cpu_engine(), out.data_ptr())}};
   if (bias_c.defined())
     args.emplace(DNNL_ARG_BIAS, dnnl::memory(pd.bias_desc(), onednn_cpu_engine(), bias_c.data_ptr()));
+  if (epilogue == Epilogue::multiply)
+    args.emplace(DNNL_ARG_ATTR_MULTIPLE_POST_OP(0) | DNNL_ARG_SRC_1,
+                 dnnl::memory(pd.dst_desc(), onednn_cpu_engine(), factor.data_ptr()));
   onednn_execute(plan.primitive, pd.scratchpad_desc(), std::move(args));
   return out;
 }

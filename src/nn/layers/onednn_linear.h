@@ -23,11 +23,16 @@ class OnednnLinear {
   OnednnLinear();
   ~OnednnLinear();
 
+  // What the product's outputs go through, in fp32 after the bias and before the one rounding: nothing,
+  // the exact (erf) GELU, or a product with `factor` (a contiguous tensor of the output's shape and dtype).
+  enum class Epilogue { none, gelu, multiply };
+
   // torch::linear(x, weight, bias): x [..., in] times weight [out, in] transposed, plus bias [out] (of the
-  // weights' dtype or fp32, added before the one rounding) when defined; a new contiguous tensor
-  // [..., out]. Plans are kept per row count; they are rebuilt when the weight tensor is replaced or
-  // modified in place (its storage or version changes).
-  torch::Tensor forward(const torch::Tensor& x, const torch::Tensor& weight, const torch::Tensor& bias);
+  // weights' dtype or fp32, added before the one rounding) when defined, through `epilogue`; a new
+  // contiguous tensor [..., out]. Plans are kept per row count and epilogue; they are rebuilt when the
+  // weight tensor is replaced or modified in place (its storage or version changes).
+  torch::Tensor forward(const torch::Tensor& x, const torch::Tensor& weight, const torch::Tensor& bias,
+                        Epilogue epilogue = Epilogue::none, const torch::Tensor& factor = {});
 
   // Packs `weight` (the layer's) into its own storage now, and again whenever it gets new values, where
   // this path applies to it and the kernel's layout fits in its bytes (as it does for the networks'

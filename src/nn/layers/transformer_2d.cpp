@@ -18,9 +18,11 @@ constexpr int64_t kFeedForwardHiddenValues = int64_t{1} << 23;
 
 GEGLUImpl::GEGLUImpl(int64_t dim_in, int64_t dim_out, const torch::TensorOptions& t) {
   proj = register_module("proj", Linear(dim_in, 2 * dim_out, true, t));
+  proj->split_output_halves();
 }
 
 torch::Tensor GEGLUImpl::forward(const torch::Tensor& x) {
+  if (proj->gated_forward_applies(x)) return proj->gated_forward(x);
   const torch::Tensor projected = proj->forward(x);
   if (geglu_applies(projected)) return geglu(projected);
   auto halves = projected.chunk(2, -1);

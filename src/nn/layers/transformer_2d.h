@@ -9,7 +9,8 @@
 namespace u3d::nn {
 
 // GEGLU: proj -> split in halves (hidden, gate) -> hidden * gelu(gate), the gate being the SECOND half,
-// with the exact erf GELU.
+// with the exact erf GELU. Where oneDNN's path applies, the two halves are two products with the gating
+// applied as they are written (LinearImpl::gated_forward); elsewhere the projection is gated after it.
 class GEGLUImpl : public torch::nn::Module {
  public:
   GEGLUImpl(int64_t dim_in, int64_t dim_out, const torch::TensorOptions& options);
