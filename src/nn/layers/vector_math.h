@@ -23,7 +23,12 @@ using i32x16 = int32_t __attribute__((vector_size(64)));
 using u32x16 = uint32_t __attribute__((vector_size(64)));
 using u16x16 = uint16_t __attribute__((vector_size(32)));
 
-U3D_INLINE f32x16 splat(float v) { return f32x16{} + v; }
+// v in every lane, as a bare broadcast. (Written as 0 + v it cost the fp32 attention loops a scalar add
+// before each broadcast key: 0 + v is +0 for v = -0, so the compiler may not drop the add.)
+U3D_INLINE f32x16 splat(float v) {
+  const f32x16 first = {v};
+  return __builtin_shufflevector(first, first, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0);
+}
 
 U3D_INLINE f32x16 load_bf16(const uint16_t* p) {
   u16x16 h;
