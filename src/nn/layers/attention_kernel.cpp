@@ -214,7 +214,10 @@ U3D_INLINE void block_values(const HeadPass<Element>& pass, int64_t first, int64
 
 // The whole pass, tile by tile.
 template <bool kBf16, class Element>
-U3D_INLINE void attend(const HeadPass<Element>& pass) {
+U3D_INLINE void attend(const HeadPass<Element>& shared_pass) {
+  // A local copy: the vector stores (memcpy) could alias the caller's struct, so with it the loops
+  // reloaded its pointers after every store.
+  const HeadPass<Element> pass = shared_pass;
   const int64_t dim = pass.dim;
   for (int64_t first_query = 0; first_query < pass.queries; first_query += kQueryTile) {
     const int64_t nq = std::min(kQueryTile, pass.queries - first_query);
